@@ -1,0 +1,37 @@
+#pragma once
+/// \file
+/// Query files in the public CSV format of the CCD benchmark (tests/data/ccd-queries/FORMAT.md):
+/// 8 rows a query, 7 integer columns x_num, x_den, y_num, y_den, z_num, z_den, truth.
+
+#include <filesystem>
+#include <optional>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "drape/ccd/query.h"
+
+namespace drape::ccd {
+
+/// A malformed or unreadable query file. what() names the file, the line and what was expected.
+class QueryFileError : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+struct QueryFile {
+  std::filesystem::path path;
+  QueryKind kind = QueryKind::VertexFace;
+  std::vector<Query> queries;
+  std::vector<bool> truth;  ///< ground truth of each query: the exact trajectories touch
+};
+
+/// The kind named by the nearest parent folder called "vertex-face" or "edge-edge".
+std::optional<QueryKind> kind_from_path(const std::filesystem::path& path);
+
+/// Reads and validates a query file. The kind is kind_override when given, else the path's.
+/// Numbers may exceed 64 bits; each rational is rounded to the nearest double (the public
+/// files hold only exactly representable values). Throws QueryFileError.
+QueryFile read_query_file(const std::filesystem::path& path, std::optional<QueryKind> kind_override = std::nullopt);
+
+}  // namespace drape::ccd

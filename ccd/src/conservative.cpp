@@ -1,0 +1,265 @@
+// The conservative method: never reports "no contact" for a contact.
+//
+// Earliest-first bisection of the step [0, 1]. An interval is dropped when
+//  - the cubic is certainly nonzero on it: all its Bernstein coefficients exceed their error
+//    bound (plus thickness * |e1 x e2|) in one sign; or
+//  - the cubic is certainly monotone on it, so it can vanish only in a narrow window around one
+//    root, and at that root the features are farther apart than the window lets them close; or
+//  - the distance at its midpoint, less how much it can shrink over half the interval, exceeds
+//    the thickness.
+// An interval that survives to the time tolerance is a contact at its start. Double precision
+// cannot tell a touch from a near miss of about 1e-15 of the coordinates; so, for exact contact
+// (zero thickness), the interval is searched again in long double (64-bit mantissa) before a
+// contact is reported. The same algorithm serves both precisions.
+#include "problem.h"
+
+namespace drape::ccd::detail {
+namespace {
+
+// Rounding of a distance evaluated at time t, in units of u times the largest coordinate:
+// positions interpolated at t (3 roundings), differences, dot products and the square root of
+// the closest-point formulas (about 10 more). 32 leaves a factor of two or more to spare.
+constexpr Scalar DISTANCE_ERROR_FACTOR = 32.0;
+// Rounding added by each de Casteljau level, in units of u times the largest coefficient.
+constexpr Scalar SUBDIVISION_ERROR_FACTOR = 4.0;
+// The root of the monotone window is refined to this fraction of the window's half-width.
+constexpr Scalar WINDOW_ROOT_FRACTION = 1e-3;
+// Extended-precision search of an undecided interval: extra bisection levels below it, and its
+// interval budget (bounds the worst case, an exactly coplanar sliding motion).
+constexpr int EXTENDED_EXTRA_LEVELS = 34;
+constexpr int EXTENDED_MAX_INTERVALS = 256;
+// A cubic whose coefficients are within this factor of their rounding error is searched in
+// long double from the start: double precision would leave many intervals undecided.
+constexpr Scalar POORLY_RESOLVED_RATIO = 2048.0;
+constexpr int STACK_SIZE = 160;  // depth-first: at most one pending sibling per level
+
+using Extended = long double;
+
+template <class T>
+using Coefficients = std::array<T, 4>;
+
+// Bound on how fast the distance between the features can change over the step: the largest
+// displacement of a point of one feature relative to a point of the other.
+Scalar relative_speed_bound(QueryKind kind, const Query& q) {
+  const auto d = [&](int i) -> Vec3 { return q.end[i] - q.start[i]; };
+  Scalar speed = 0;
+  if (kind == QueryKind::VertexFace) {
+    for (int i = 1; i < 4; ++i) speed = std::max(speed, (d(0) - d(i)).norm());
+  } else {
+    for (int i = 0; i < 2; ++i)
+      for (int j = 2; j < 4; ++j) speed = std::max(speed, (d(i) - d(j)).norm());
+  }
+  return speed * (1 + 8 * UNIT_ROUNDOFF);
+}
+
+// |d(t)| = (distance to the plane or between the lines) * |e1(t) x e2(t)|, with e1, e2 the
+// triangle's edges from face[0] (vertex-face) or the two edges (edge-edge); the feature distance
+// is at least that. |e1 x e2| <= |e1| |e2| and a linear |e(t)| is largest at an end of the step,
+// so |d| > thickness * |e1|max |e2|max proves the features stay farther apart than thickness.
+Scalar thickness_to_cubic(QueryKind kind, const Query& q, Scalar thickness) {
+  if (thickness <= 0) return 0;
+  const auto longest = [&](int i, int j) {
+    return std::max((q.start[j] - q.start[i]).norm(), (q.end[j] - q.end[i]).norm());
+  };
+  const Scalar factor = kind == QueryKind::VertexFace ? longest(1, 2) * longest(1, 3) : longest(0, 1) * longest(2, 3);
+  return thickness * factor * (1 + 16 * UNIT_ROUNDOFF);
+}
+
+template <class T>
+T max_abs(const Coefficients<T>& b) {
+  return std::max({std::abs(b[0]), std::abs(b[1]), std::abs(b[2]), std::abs(b[3])});
+}
+
+template <class T>
+bool certainly_nonzero(const Coefficients<T>& b, T margin) {
+  return (b[0] > margin && b[1] > margin && b[2] > margin && b[3] > margin) ||
+         (b[0] < -margin && b[1] < -margin && b[2] < -margin && b[3] < -margin);
+}
+
+// de Casteljau split at local parameter s.
+template <class T>
+void split_at(const Coefficients<T>& b, T s, Coefficients<T>& left, Coefficients<T>& right) {
+  const T r = 1 - s;
+  const T b01 = r * b[0] + s * b[1], b12 = r * b[1] + s * b[2], b23 = r * b[2] + s * b[3];
+  const T b012 = r * b01 + s * b12, b123 = r * b12 + s * b23;
+  const T mid = r * b012 + s * b123;
+  left = {b[0], b01, b012, mid};
+  right = {mid, b123, b23, b[3]};
+}
+
+// What one search needs, in its precision.
+template <class T>
+struct Setup {
+  const Problem& problem;
+  bool use_cubic;
+  T speed;            // relative speed bound
+  T distance_margin;  // thickness plus the rounding of a distance
+  T cubic_margin;     // rounding of the coefficients plus thickness * |e1 x e2|
+  T level_error;      // rounding added by one subdivision level
+  T time_tolerance;
+  int max_intervals;
+  bool refine_in_extended;  // double search: re-examine undecided intervals in long double
+};
+
+template <class T>
+Setup<T> make_setup(const Problem& p, bool use_cubic, const Coefficients<T>& b, T cubic_error) {
+  const Options& o = p.options;
+  const T u = std::numeric_limits<T>::epsilon() / 2;
+  return Setup<T>{p,
+                  use_cubic,
+                  T(relative_speed_bound(p.kind, p.query)),
+                  T(o.thickness) + T(DISTANCE_ERROR_FACTOR) * u * T(max_abs_coordinate(p.query)),
+                  cubic_error + T(thickness_to_cubic(p.kind, p.query, o.thickness)),
+                  T(SUBDIVISION_ERROR_FACTOR) * u * max_abs(b),
+                  T(o.time_tolerance),
+                  o.max_intervals,
+                  false};
+}
+
+template <class T>
+struct Interval {
+  T lo, hi;
+  Coefficients<T> b;
+  int depth;  // subdivision levels below the coefficients' own computation
+};
+
+template <class T>
+struct Outcome {
+  bool hit = false;
+  T toc = 1;
+  Vec2 params = Vec2::Zero();
+  bool budget_spent = false;
+  bool culled = false;  // the whole interval excluded by the cubic at once
+  int examined = 0;
+};
+
+// Whether [lo, hi] certainly holds no exact contact, searched in long double.
+Outcome<Extended> extended_search(const Problem& p, bool use_cubic, Scalar lo, Scalar hi);
+
+template <class T>
+Outcome<T> search(const Setup<T>& setup, Interval<T> first) {
+  const Problem& p = setup.problem;
+  Interval<T> stack[STACK_SIZE];
+  int top = 0;
+  stack[top++] = first;
+  Outcome<T> out;
+
+  // An undecided interval: a contact, unless the extended search clears it.
+  const auto undecided = [&](const Interval<T>& I, T toc, Vec2 params) {
+    if (setup.refine_in_extended) {
+      const auto fine = extended_search(p, setup.use_cubic, Scalar(I.lo), Scalar(I.hi));
+      out.examined += fine.examined;
+      if (!fine.hit) return false;
+      out.budget_spent = fine.budget_spent;
+      toc = std::max(I.lo, T(fine.toc));
+      params = fine.params;
+    }
+    out.hit = true;
+    out.toc = toc;
+    out.params = params;
+    return true;
+  };
+
+  while (top > 0) {
+    const Interval<T> I = stack[--top];
+    ++out.examined;
+    const T width = I.hi - I.lo;
+    const T error = setup.cubic_margin + T(I.depth) * setup.level_error;
+    if (setup.use_cubic && certainly_nonzero(I.b, error)) {
+      out.culled = out.examined == 1;
+      continue;
+    }
+
+    if (setup.use_cubic) {
+      // Monotone on the interval: |d| <= error only within half_width (local units) of s.
+      const std::array<T, 3> slope{3 * (I.b[1] - I.b[0]), 3 * (I.b[2] - I.b[1]), 3 * (I.b[3] - I.b[2])};
+      const T slope_error = 6 * error + 8 * (std::numeric_limits<T>::epsilon() / 2) * max_abs(I.b);
+      const bool rising = slope[0] > slope_error && slope[1] > slope_error && slope[2] > slope_error;
+      const bool falling = slope[0] < -slope_error && slope[1] < -slope_error && slope[2] < -slope_error;
+      if (rising || falling) {
+        const T min_slope = std::min({std::abs(slope[0]), std::abs(slope[1]), std::abs(slope[2])}) - slope_error;
+        const T half_width = error / min_slope;
+        const T root_tolerance = T(WINDOW_ROOT_FRACTION) * half_width;
+        T s = 0;
+        if (I.b[0] == 0) s = 0;
+        else if (I.b[3] == 0) s = 1;
+        else if ((I.b[0] < 0) != (I.b[3] < 0)) s = refine_single_root<T>(I.b, root_tolerance);
+        else s = std::abs(I.b[0]) <= std::abs(I.b[3]) ? T(0) : T(1);
+        const T t = I.lo + s * width;
+        const T reach = (half_width + root_tolerance) * width;  // in step units
+        const auto prox = proximity_at<T>(p.kind, p.query, t);
+        if (prox.distance - prox.error - setup.distance_margin > setup.speed * reach) continue;
+        if (2 * reach <= setup.time_tolerance) {
+          if (undecided(I, std::max(I.lo, t - reach), prox.params)) break;
+          continue;
+        }
+      }
+    }
+
+    const T mid = I.lo + width / 2;
+    const auto prox = proximity_at<T>(p.kind, p.query, mid);
+    if (prox.distance - prox.error - setup.distance_margin > width / 2 * setup.speed) continue;
+    if (out.examined >= setup.max_intervals || top + 2 > STACK_SIZE) {
+      // Out of budget: a contact at the earliest time not yet excluded.
+      out.budget_spent = true;
+      out.hit = true;
+      out.toc = I.lo;
+      out.params = prox.params;
+      break;
+    }
+    if (width <= setup.time_tolerance) {
+      if (undecided(I, I.lo, prox.params)) break;
+      continue;
+    }
+    Coefficients<T> left, right;
+    split_at<T>(I.b, T(0.5), left, right);
+    stack[top++] = {mid, I.hi, right, I.depth + 1};
+    stack[top++] = {I.lo, mid, left, I.depth + 1};
+  }
+  return out;
+}
+
+Outcome<Extended> extended_search(const Problem& p, bool use_cubic, Scalar lo, Scalar hi) {
+  using T = Extended;
+  const auto cubic = coplanarity_cubic_in<T>(p.kind, p.query);
+  // The coefficients on [lo, hi]: two splits, at lo and then at hi within [lo, 1].
+  Coefficients<T> left, right = cubic.b;
+  if (lo > 0) split_at<T>(cubic.b, T(lo), left, right);
+  Coefficients<T> on_interval = right;
+  if (hi < 1) split_at<T>(right, (T(hi) - T(lo)) / (1 - T(lo)), on_interval, left);
+  Setup<T> setup = make_setup<T>(p, use_cubic, cubic.b, cubic.error);
+  if (lo > 0 || hi < 1) {
+    // Below an interval double precision left undecided.
+    setup.time_tolerance = (T(hi) - T(lo)) * std::ldexp(T(1), -EXTENDED_EXTRA_LEVELS);
+    setup.max_intervals = EXTENDED_MAX_INTERVALS;
+  }
+  return search<T>(setup, Interval<T>{T(lo), T(hi), on_interval, 2});
+}
+
+}  // namespace
+
+Result conservative_search(const Problem& p, bool use_cubic) {
+  // Only the conservative method itself escalates to long double; the degenerate path of the
+  // other methods (use_cubic = false) stays in double.
+  const bool exact_contact = p.options.thickness == 0 && use_cubic;
+  Outcome<Scalar> out;
+  if (exact_contact && max_abs(p.cubic.b) <= POORLY_RESOLVED_RATIO * p.cubic.error) {
+    // Coplanar, or nearly, to double precision: the whole step is searched in long double,
+    // where the cubic may still tell (its rounding error is 2^11 times smaller).
+    const auto fine = extended_search(p, use_cubic, 0.0, 1.0);
+    out = Outcome<Scalar>{fine.hit, Scalar(fine.toc), fine.params, fine.budget_spent, fine.culled, fine.examined};
+  } else {
+    Setup<Scalar> setup = make_setup<Scalar>(p, use_cubic, p.cubic.b, p.cubic.error);
+    setup.refine_in_extended = exact_contact;
+    out = search<Scalar>(setup, Interval<Scalar>{0.0, 1.0, p.cubic.b, 0});
+  }
+  Result result;
+  result.hit = out.hit;
+  result.toc = out.hit ? out.toc : 1.0;
+  result.params = out.params;
+  result.path = out.budget_spent ? Path::Degenerate : (out.culled ? Path::Culled : Path::Solved);
+  result.root_solves = static_cast<std::uint16_t>(std::min(out.examined, 65535));
+  return result;
+}
+
+}  // namespace drape::ccd::detail

@@ -1,0 +1,156 @@
+// The four CCD methods behind vertex_face_ccd / edge_edge_ccd. ccd-notes.md sections 1-3.
+#include <algorithm>
+#include <cmath>
+
+#include "drape/ccd/cubic_solver.h"
+#include "problem.h"
+
+namespace drape::ccd {
+
+std::string_view method_name(Method method) {
+  switch (method) {
+    case Method::Cubic: return "cubic";
+    case Method::Dnf: return "dnf";
+    case Method::Vincent: return "vincent";
+    case Method::Conservative: return "conservative";
+  }
+  return "?";
+}
+
+std::string_view kind_name(QueryKind kind) {
+  return kind == QueryKind::VertexFace ? "vertex-face" : "edge-edge";
+}
+
+std::optional<Method> parse_method(std::string_view name) {
+  for (Method m : ALL_METHODS)
+    if (method_name(m) == name) return m;
+  return std::nullopt;
+}
+
+
+namespace {
+
+using detail::Problem;
+
+// The inside test of the root-finding methods at a candidate time.
+bool touching_at(const Problem& p, Scalar t, Result& result) {
+  const auto prox = detail::proximity_at<Scalar>(p.kind, p.query, t);
+  const Scalar tolerance = p.options.thickness + p.options.contact_tolerance * detail::query_size(p.query);
+  if (!(prox.distance <= tolerance)) return false;
+  result.hit = true;
+  result.toc = t;
+  result.params = prox.params;
+  return true;
+}
+
+Result degenerate_path(const Problem& p) {
+  Result r = detail::conservative_search(p, /*use_cubic=*/false);
+  r.path = Path::Degenerate;
+  return r;
+}
+
+// ---------------------------------------------------------------------------------------------
+// Cubic: all real roots by the closed form, inside test at each in increasing order.
+
+Result cubic_method(const Problem& p) {
+  if (detail::cubic_vanishes(p.cubic)) return degenerate_path(p);
+  Result result;
+  result.path = Path::Solved;
+  result.root_solves = 1;
+  std::array<Scalar, 3> roots{};
+  const int count = solve_cubic(to_power(p.cubic.b), roots);
+  for (int i = 0; i < count; ++i) {
+    if (roots[i] < 0 || roots[i] > 1) continue;
+    if (touching_at(p, roots[i], result)) break;
+  }
+  return result;
+}
+
+Result dnf_method(const Problem& p) {
+  if (detail::cubic_vanishes(p.cubic)) return degenerate_path(p);
+  if (same_strict_sign(p.cubic.b)) return Result{};  // culled
+  return cubic_method(p);
+}
+
+// ---------------------------------------------------------------------------------------------
+// Vincent: sign variations V of the Bernstein coefficients on an interval. V = 0: no root;
+// V = 1: exactly one, refined inside its bracket; V >= 2: split at the midpoint (Vincent's
+// theorem: splitting ends with V <= 1 unless there is a multiple root).
+
+Result vincent_method(const Problem& p) {
+  if (detail::cubic_vanishes(p.cubic)) return degenerate_path(p);
+  Result result;
+  const Bernstein3& b = p.cubic.b;
+  if (b[0] == 0) {  // the features start coplanar
+    result.path = Path::Solved;
+    if (touching_at(p, 0.0, result)) return result;
+  }
+  if (sign_variations(b) == 0 && b[3] != 0) return result;  // culled (or only the root at 0)
+
+  struct Interval {
+    Scalar lo, hi;
+    Bernstein3 b;
+    int depth;
+  };
+  constexpr int STACK_SIZE = 64;
+  Interval stack[STACK_SIZE];
+  int top = 0;
+  stack[top++] = {0.0, 1.0, b, 0};
+  result.path = Path::Solved;
+  int solves = 0;
+  const int max_depth = std::min(p.options.max_subdivision_depth, STACK_SIZE - 2);
+  while (top > 0) {
+    const Interval I = stack[--top];
+    const int variations = sign_variations(I.b);
+    const Scalar width = I.hi - I.lo;
+    if (variations == 1) {
+      ++solves;
+      const Scalar s = detail::refine_single_root<Scalar>(I.b, p.options.root_tolerance / width);
+      if (touching_at(p, I.lo + s * width, result)) break;
+    } else if (variations >= 2) {
+      if (I.depth >= max_depth) {
+        // A tangential (multiple) root does not separate: test where it sits.
+        result.path = Path::Degenerate;
+        if (touching_at(p, I.lo + 0.5 * width, result)) break;
+      } else {
+        ++solves;
+        Bernstein3 left, right;
+        split_half(I.b, left, right);
+        const Scalar mid = I.lo + 0.5 * width;
+        stack[top++] = {mid, I.hi, right, I.depth + 1};
+        stack[top++] = {I.lo, mid, left, I.depth + 1};
+        continue;
+      }
+    }
+    if (I.b[3] == 0 && touching_at(p, I.hi, result)) break;  // a root exactly at the end
+  }
+  result.root_solves = static_cast<std::uint16_t>(std::min(solves, 65535));
+  return result;
+}
+
+Result run(QueryKind kind, const Query& query, const Options& options) {
+  const Problem p{kind, query, options, coplanarity_cubic(kind, query)};
+  switch (options.method) {
+    case Method::Cubic: return cubic_method(p);
+    case Method::Dnf: return dnf_method(p);
+    case Method::Vincent: return vincent_method(p);
+    case Method::Conservative: return detail::conservative_search(p, /*use_cubic=*/true);
+  }
+  return Result{};
+}
+
+}  // namespace
+
+Result vertex_face_ccd(const VertexFaceQuery& query, const Options& options) {
+  return run(QueryKind::VertexFace, query, options);
+}
+
+Result edge_edge_ccd(const EdgeEdgeQuery& query, const Options& options) {
+  return run(QueryKind::EdgeEdge, query, options);
+}
+
+Result elementary_ccd(QueryKind kind, const Query& query, const Options& options) {
+  return run(kind, query, options);
+}
+
+}  // namespace drape::ccd

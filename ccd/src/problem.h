@@ -1,0 +1,101 @@
+#pragma once
+// Internal to ccd/: what every method needs about one elementary query.
+
+#include <algorithm>
+#include <cmath>
+
+#include "drape/ccd/coplanarity.h"
+#include "drape/ccd/distance.h"
+#include "drape/ccd/query.h"
+
+namespace drape::ccd::detail {
+
+struct Problem {
+  QueryKind kind;
+  const Query& query;
+  const Options& options;
+  CoplanarityCubic cubic;
+};
+
+/// Positions of the four points at time t, in precision T.
+template <class T>
+std::array<Vector3<T>, 4> positions_at(const Query& q, T t) {
+  std::array<Vector3<T>, 4> x;
+  for (int i = 0; i < 4; ++i) {
+    const Vector3<T> start = q.start[i].template cast<T>();
+    x[i] = start + t * (q.end[i].template cast<T>() - start);
+  }
+  return x;
+}
+
+/// Distance between the two features at time t, with its conditioning error bound and the
+/// contact parameters there.
+template <class T>
+struct Proximity {
+  T distance = 0;
+  T error = 0;
+  Vec2 params = Vec2::Zero();
+};
+
+template <class T>
+Proximity<T> proximity_at(QueryKind kind, const Query& q, T t) {
+  const auto x = positions_at<T>(q, t);
+  const auto d = kind == QueryKind::VertexFace ? point_triangle_distance<T>(x[0], x[1], x[2], x[3])
+                                               : segment_segment_distance<T>(x[0], x[1], x[2], x[3]);
+  return Proximity<T>{d.distance, d.error, Vec2(Scalar(d.param0), Scalar(d.param1))};
+}
+
+/// Diagonal of the box around the eight points: the length unit of relative tolerances.
+inline Scalar query_size(const Query& q) {
+  Vec3 lo = q.start[0], hi = q.start[0];
+  for (int i = 0; i < 4; ++i) {
+    lo = lo.cwiseMin(q.start[i]).cwiseMin(q.end[i]);
+    hi = hi.cwiseMax(q.start[i]).cwiseMax(q.end[i]);
+  }
+  return (hi - lo).norm();
+}
+
+inline Scalar max_abs_coordinate(const Query& q) {
+  Scalar m = 0;
+  for (int i = 0; i < 4; ++i)
+    m = std::max({m, q.start[i].lpNorm<Eigen::Infinity>(), q.end[i].lpNorm<Eigen::Infinity>()});
+  return m;
+}
+
+/// The cubic is lost in its rounding error: the motion is coplanar to working precision.
+inline bool cubic_vanishes(const CoplanarityCubic& c) { return max_abs(c.b) <= c.error; }
+
+/// The conservative method, and the degenerate path of the others (use_cubic = false: the
+/// cubic says nothing, decide by distance alone).
+Result conservative_search(const Problem& p, bool use_cubic);
+
+/// Root of a cubic with exactly one root on its interval (a sign change between the ends), in
+/// the interval's local coordinate s in [0, 1]: safeguarded Newton (rtsafe, Numerical Recipes
+/// section 9.4) inside the sign bracket, to within tolerance.
+template <class T>
+T refine_single_root(const std::array<T, 4>& b, T tolerance) {
+  constexpr int MAX_ITERATIONS = 100;  // bisection alone halves the bracket 100 times
+  const std::array<T, 4> a{b[0], 3 * (b[1] - b[0]), 3 * (b[2] - 2 * b[1] + b[0]), b[3] - 3 * b[2] + 3 * b[1] - b[0]};
+  // The sign just right of s = 0 is that of the first nonzero coefficient.
+  const T first = b[0] != 0 ? b[0] : (b[1] != 0 ? b[1] : b[2]);
+  const bool negative_at_lo = first < 0;
+  T lo = 0, hi = 1, s = T(0.5);
+  for (int iteration = 0; iteration < MAX_ITERATIONS; ++iteration) {
+    const T f = ((a[3] * s + a[2]) * s + a[1]) * s + a[0];
+    if (f == 0) return s;
+    if ((f < 0) == negative_at_lo) lo = s; else hi = s;
+    if (hi - lo <= tolerance) break;
+    const T slope = (3 * a[3] * s + 2 * a[2]) * s + a[1];
+    const T next = slope != 0 ? s - f / slope : lo;
+    if (!(next > lo && next < hi)) {
+      s = T(0.5) * (lo + hi);  // Newton left the bracket: bisect
+    } else if (std::abs(next - s) <= tolerance) {
+      return next;  // Newton converged
+    } else {
+      s = next;
+    }
+  }
+  return T(0.5) * (lo + hi);
+}
+
+}  // namespace drape::ccd::detail
