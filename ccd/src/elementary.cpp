@@ -52,23 +52,31 @@ Result degenerate_path(const Problem& p) {
 // ---------------------------------------------------------------------------------------------
 // Cubic: all real roots by the closed form, inside test at each in increasing order.
 
+// A root of the cubic within its rounding error of an end of the step: the features may touch
+// right at t = 0 or t = 1 (resting contact), whatever sign rounding gave the end coefficient.
+bool root_possible_at_start(const Problem& p) { return std::abs(p.cubic.b[0]) <= p.cubic.error; }
+bool root_possible_at_end(const Problem& p) { return std::abs(p.cubic.b[3]) <= p.cubic.error; }
+
 Result cubic_method(const Problem& p) {
   if (detail::cubic_vanishes(p.cubic)) return degenerate_path(p);
   Result result;
   result.path = Path::Solved;
   result.root_solves = 1;
+  if (root_possible_at_start(p) && touching_at(p, 0.0, result)) return result;
   std::array<Scalar, 3> roots{};
   const int count = solve_cubic(to_power(p.cubic.b), roots);
   for (int i = 0; i < count; ++i) {
     if (roots[i] < 0 || roots[i] > 1) continue;
-    if (touching_at(p, roots[i], result)) break;
+    if (touching_at(p, roots[i], result)) return result;
   }
+  if (root_possible_at_end(p)) touching_at(p, 1.0, result);
   return result;
 }
 
 Result dnf_method(const Problem& p) {
   if (detail::cubic_vanishes(p.cubic)) return degenerate_path(p);
-  if (same_strict_sign(p.cubic.b)) return Result{};  // culled
+  if (same_strict_sign(p.cubic.b) && !root_possible_at_start(p) && !root_possible_at_end(p))
+    return Result{};  // culled
   return cubic_method(p);
 }
 
@@ -81,11 +89,11 @@ Result vincent_method(const Problem& p) {
   if (detail::cubic_vanishes(p.cubic)) return degenerate_path(p);
   Result result;
   const Bernstein3& b = p.cubic.b;
-  if (b[0] == 0) {  // the features start coplanar
+  if (root_possible_at_start(p)) {  // the features may start coplanar
     result.path = Path::Solved;
     if (touching_at(p, 0.0, result)) return result;
   }
-  if (sign_variations(b) == 0 && b[3] != 0) return result;  // culled (or only the root at 0)
+  if (sign_variations(b) == 0 && !root_possible_at_end(p)) return result;  // culled
 
   struct Interval {
     Scalar lo, hi;
@@ -124,6 +132,7 @@ Result vincent_method(const Problem& p) {
     }
     if (I.b[3] == 0 && touching_at(p, I.hi, result)) break;  // a root exactly at the end
   }
+  if (!result.hit && root_possible_at_end(p)) touching_at(p, 1.0, result);
   result.root_solves = static_cast<std::uint16_t>(std::min(solves, 65535));
   return result;
 }

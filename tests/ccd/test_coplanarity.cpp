@@ -1,0 +1,79 @@
+// The coplanarity cubic: its coefficients against direct evaluation of d(t), and its error bound.
+#include <gtest/gtest.h>
+
+#include <random>
+
+#include "drape/ccd/coplanarity.h"
+
+using namespace drape;
+using namespace drape::ccd;
+
+namespace {
+
+// d(t) = (x2 - x1) x (x3 - x1) . (x4 - x1) at the positions of time t, straight from the definition.
+Scalar direct(QueryKind kind, const Query& q, Scalar t) {
+  const auto order = coplanarity_order(kind);
+  std::array<Vec3, 4> x;
+  for (int i = 0; i < 4; ++i) x[i] = q.start[order[i]] + t * (q.end[order[i]] - q.start[order[i]]);
+  return (x[1] - x[0]).cross(x[2] - x[0]).dot(x[3] - x[0]);
+}
+
+Query random_query(std::mt19937_64& rng) {
+  std::uniform_real_distribution<Scalar> u(-1, 1);
+  Query q;
+  for (int i = 0; i < 4; ++i) {
+    q.start[i] = Vec3(u(rng), u(rng), u(rng));
+    q.end[i] = q.start[i] + Vec3(u(rng), u(rng), u(rng));
+  }
+  return q;
+}
+
+}  // namespace
+
+TEST(Coplanarity, BernsteinAndPowerFormsMatchDirectEvaluation) {
+  std::mt19937_64 rng(11);
+  for (QueryKind kind : {QueryKind::VertexFace, QueryKind::EdgeEdge}) {
+    for (int trial = 0; trial < 2000; ++trial) {
+      const Query q = random_query(rng);
+      const auto cubic = coplanarity_cubic(kind, q);
+      const Power3 a = coplanarity_power(kind, q);
+      for (Scalar t : {0.0, 0.2, 0.5, 0.77, 1.0}) {
+        const Scalar d = direct(kind, q, t);
+        EXPECT_NEAR(evaluate_bernstein(cubic.b, t), d, 1e-12);
+        EXPECT_NEAR(evaluate_power(a, t), d, 1e-12);
+      }
+    }
+  }
+}
+
+TEST(Coplanarity, VertexFaceUsesTheFaceAsX1X2X3) {
+  // Vertex above the triangle (0,0,0), (1,0,0), (0,1,0): d = +height (right-handed triangle).
+  Query q;
+  q.start = {Vec3(0.2, 0.2, 0.5), Vec3(0, 0, 0), Vec3(1, 0, 0), Vec3(0, 1, 0)};
+  q.end = {Vec3(0.2, 0.2, -0.5), Vec3(0, 0, 0), Vec3(1, 0, 0), Vec3(0, 1, 0)};
+  const auto cubic = coplanarity_cubic(QueryKind::VertexFace, q);
+  EXPECT_DOUBLE_EQ(cubic.b[0], 0.5);
+  EXPECT_DOUBLE_EQ(cubic.b[3], -0.5);
+}
+
+TEST(Coplanarity, ErrorBoundCoversTheRoundingAtLargeOffsets) {
+  // The same configuration translated far from the origin: the computed coefficients must stay
+  // within the stated bound of the untranslated (here exactly representable) ones.
+  std::mt19937_64 rng(3);
+  std::uniform_int_distribution<int> small(-64, 64);
+  for (int trial = 0; trial < 2000; ++trial) {
+    Query q;
+    for (int i = 0; i < 4; ++i) {
+      q.start[i] = Vec3(small(rng), small(rng), small(rng)) / 64.0;
+      q.end[i] = q.start[i] + Vec3(small(rng), small(rng), small(rng)) / 64.0;
+    }
+    const auto exact = coplanarity_cubic(QueryKind::EdgeEdge, q);  // dyadic: computed exactly
+    Query moved = q;
+    const Vec3 offset(1e6 + 0.1, -3e5 - 0.3, 7e5 + 0.7);
+    for (int i = 0; i < 4; ++i) moved.start[i] += offset, moved.end[i] += offset;
+    const auto cubic = coplanarity_cubic(QueryKind::EdgeEdge, moved);
+    // The translation itself rounds each coordinate by up to u * 1e6: that moves the exact cubic
+    // by about 1e6 u |A||B| per unit |C| change; allow it, and check the computed bound is honest.
+    for (int i = 0; i < 4; ++i) EXPECT_LE(std::abs(cubic.b[i] - exact.b[i]), cubic.error + 1e-7) << i;
+  }
+}
