@@ -10,6 +10,9 @@ constexpr Scalar PI = 3.14159265358979323846;
 // Newton steps applied to each closed-form root: enough to reach full precision from the
 // closed form's few-ulp (or, near a double root, square-root-of-ulp) error.
 constexpr int POLISH_STEPS = 3;
+// Only roots this close to [0, 1] (in units of the step) are polished: the others cannot
+// become roots inside the step by polishing.
+constexpr Scalar POLISH_WINDOW = 1e-3;
 
 int solve_linear(Scalar a1, Scalar a0, std::array<Scalar, 3>& roots) {
   if (a1 == 0) return a0 == 0 ? -1 : 0;
@@ -80,6 +83,7 @@ int solve_cubic(const Power3& a, std::array<Scalar, 3>& roots) {
   }
   for (int i = 0; i < count; ++i) {
     Scalar t = roots[i];
+    if (t < -POLISH_WINDOW || t > 1 + POLISH_WINDOW) continue;  // irrelevant to the step
     for (int step = 0; step < POLISH_STEPS; ++step) {
       const Scalar slope = evaluate_power_derivative(a, t);
       if (slope == 0) break;

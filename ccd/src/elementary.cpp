@@ -32,14 +32,26 @@ namespace {
 
 using detail::Problem;
 
-// The inside test of the root-finding methods at a candidate time.
+// The inside test of the root-finding methods at a candidate time: the closest points of the
+// features there (the standard formulas) and their distance against the tolerance.
 bool touching_at(const Problem& p, Scalar t, Result& result) {
-  const auto prox = detail::proximity_at<Scalar>(p.kind, p.query, t);
-  const Scalar tolerance = p.options.thickness + p.options.contact_tolerance * detail::query_size(p.query);
-  if (!(prox.distance <= tolerance)) return false;
+  const auto x = detail::positions_at<Scalar>(p.query, t);
+  Scalar distance_squared = 0;
+  Vec2 params;
+  if (p.kind == QueryKind::VertexFace) {
+    const auto c = closest_point_triangle<Scalar>(x[0], x[1], x[2], x[3]);
+    distance_squared = c.distance_squared;
+    params = Vec2(c.weight_b, c.weight_c);
+  } else {
+    const auto c = closest_segment_segment<Scalar>(x[0], x[1], x[2], x[3]);
+    distance_squared = c.distance_squared;
+    params = Vec2(c.s, c.u);
+  }
+  const Scalar tolerance = p.options.thickness + p.options.contact_tolerance * p.cubic.extent;
+  if (!(distance_squared <= tolerance * tolerance)) return false;
   result.hit = true;
   result.toc = t;
-  result.params = prox.params;
+  result.params = params;
   return true;
 }
 
@@ -56,6 +68,13 @@ Result degenerate_path(const Problem& p) {
 // right at t = 0 or t = 1 (resting contact), whatever sign rounding gave the end coefficient.
 bool root_possible_at_start(const Problem& p) { return std::abs(p.cubic.b[0]) <= p.cubic.error; }
 bool root_possible_at_end(const Problem& p) { return std::abs(p.cubic.b[3]) <= p.cubic.error; }
+
+// The filter's cull: one strict sign and both ends clear of their rounding error (a vanishing
+// cubic has |b0| within its error, so it is never culled).
+bool culled_by_sign(const Problem& p) {
+  const Bernstein3& b = p.cubic.b;
+  return same_strict_sign(b) & (std::min(std::abs(b[0]), std::abs(b[3])) > p.cubic.error);
+}
 
 Result cubic_method(const Problem& p) {
   if (detail::cubic_vanishes(p.cubic)) return degenerate_path(p);
@@ -74,9 +93,7 @@ Result cubic_method(const Problem& p) {
 }
 
 Result dnf_method(const Problem& p) {
-  if (detail::cubic_vanishes(p.cubic)) return degenerate_path(p);
-  if (same_strict_sign(p.cubic.b) && !root_possible_at_start(p) && !root_possible_at_end(p))
-    return Result{};  // culled
+  if (culled_by_sign(p)) return Result{};
   return cubic_method(p);
 }
 
@@ -86,14 +103,24 @@ Result dnf_method(const Problem& p) {
 // theorem: splitting ends with V <= 1 unless there is a multiple root).
 
 Result vincent_method(const Problem& p) {
+  const Bernstein3& b = p.cubic.b;
+  if (culled_by_sign(p)) return Result{};  // the common case first
   if (detail::cubic_vanishes(p.cubic)) return degenerate_path(p);
   Result result;
-  const Bernstein3& b = p.cubic.b;
   if (root_possible_at_start(p)) {  // the features may start coplanar
     result.path = Path::Solved;
     if (touching_at(p, 0.0, result)) return result;
   }
-  if (sign_variations(b) == 0 && !root_possible_at_end(p)) return result;  // culled
+  const int variations = sign_variations(b);
+  if (variations == 0 && !root_possible_at_end(p)) return result;  // culled
+  result.path = Path::Solved;
+  if (variations == 1) {
+    // The common case after the cull: one root, bracketed by the ends of the step.
+    result.root_solves = 1;
+    if (touching_at(p, detail::refine_single_root<Scalar>(b, p.options.root_tolerance), result)) return result;
+    if (root_possible_at_end(p)) touching_at(p, 1.0, result);
+    return result;
+  }
 
   struct Interval {
     Scalar lo, hi;

@@ -45,16 +45,6 @@ Proximity<T> proximity_at(QueryKind kind, const Query& q, T t) {
   return Proximity<T>{d.distance, d.error, Vec2(Scalar(d.param0), Scalar(d.param1))};
 }
 
-/// Diagonal of the box around the eight points: the length unit of relative tolerances.
-inline Scalar query_size(const Query& q) {
-  Vec3 lo = q.start[0], hi = q.start[0];
-  for (int i = 0; i < 4; ++i) {
-    lo = lo.cwiseMin(q.start[i]).cwiseMin(q.end[i]);
-    hi = hi.cwiseMax(q.start[i]).cwiseMax(q.end[i]);
-  }
-  return (hi - lo).norm();
-}
-
 inline Scalar max_abs_coordinate(const Query& q) {
   Scalar m = 0;
   for (int i = 0; i < 4; ++i)
@@ -79,6 +69,8 @@ T refine_single_root(const std::array<T, 4>& b, T tolerance) {
   // The sign just right of s = 0 is that of the first nonzero coefficient.
   const T first = b[0] != 0 ? b[0] : (b[1] != 0 ? b[1] : b[2]);
   const bool negative_at_lo = first < 0;
+  // Start at the midpoint: a secant start lands next to an end whose value is tiny, where the
+  // computed sign may be wrong and the bracket would lose the root (found by the agreement test).
   T lo = 0, hi = 1, s = T(0.5);
   for (int iteration = 0; iteration < MAX_ITERATIONS; ++iteration) {
     const T f = ((a[3] * s + a[2]) * s + a[1]) * s + a[0];

@@ -32,8 +32,10 @@ inline int sign_variations(const Bernstein3& b) {
 /// True when the four coefficients are all > 0 or all < 0: the "deforming non-penetration
 /// filter" of Tang et al. 2010 (no root in the closed interval).
 inline bool same_strict_sign(const Bernstein3& b) {
-  return (b[0] > 0 && b[1] > 0 && b[2] > 0 && b[3] > 0) ||
-         (b[0] < 0 && b[1] < 0 && b[2] < 0 && b[3] < 0);
+  // Branch-free: the signs are random in a cloth step and a branch per comparison mispredicts.
+  const Scalar lo = std::min(std::min(b[0], b[1]), std::min(b[2], b[3]));
+  const Scalar hi = std::max(std::max(b[0], b[1]), std::max(b[2], b[3]));
+  return (lo > 0) | (hi < 0);
 }
 
 /// True when every coefficient exceeds margin in one sign: the cubic is then certainly

@@ -53,9 +53,10 @@ struct Options {
   Scalar thickness = 0.0;
 
   /// Inside test of Cubic, Dnf and Vincent: at a root of the cubic, the features touch when
-  /// their distance is at most thickness + contact_tolerance * (size of the query's bounding
-  /// box). Relative, dimensionless; 1e-9 absorbs the root's rounding (about 1e-12 relative)
-  /// and stays far below any gap a simulation can resolve.
+  /// their distance is at most thickness + contact_tolerance * (the query's extent: the largest
+  /// 1-norm of a point's offset from the first face or edge point). Relative, dimensionless;
+  /// 1e-9 absorbs the root's rounding (about 1e-12 relative) and stays far below any gap a
+  /// simulation can resolve.
   Scalar contact_tolerance = 1e-9;
 
   /// Root refinement stops when the bracket is narrower than this (units of the step).

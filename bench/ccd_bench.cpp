@@ -1,0 +1,217 @@
+// ccd_bench: nanoseconds per elementary CCD test for drape's four methods and the peers (FCL,
+// Bullet) on identical queries, side by side in one run, with the targets checked.
+//
+//   ccd_bench [--passes N] [--grid N] [--data DIR]
+//
+// Datasets: (a) the public ground-truth queries under tests/data/ccd-queries; (b) a cloth-like
+// set from ccd/query_generator.h (a jittered grid and a sheet folded over it, moving a little).
+#include <CLI/CLI.hpp>
+#include <algorithm>
+#include <chrono>
+#include <cstdio>
+#include <filesystem>
+#include <functional>
+
+#include "ccd_peers.h"
+#include "drape/ccd/evaluation.h"
+#include "drape/ccd/query_file.h"
+#include "drape/ccd/query_generator.h"
+
+using namespace drape;
+using namespace drape::ccd;
+
+namespace {
+
+struct Contender {
+  std::string name;
+  bool vertex_face = true, edge_edge = true;
+  std::function<bool(QueryKind, const Query&)> test;
+};
+
+struct KindSet {
+  QueryKind kind;
+  std::vector<Query> queries;
+  std::vector<bool> truth;  // empty when there is no ground truth
+};
+
+struct Row {
+  std::string contender, kind;
+  std::size_t queries = 0, hits = 0, false_negatives = 0, false_positives = 0;
+  double ns_per_query = 0;
+  bool has_truth = false;
+};
+
+double seconds_for(const Contender& c, const KindSet& set, std::uint64_t& sink) {
+  const auto begin = std::chrono::steady_clock::now();
+  for (const Query& q : set.queries) sink += c.test(set.kind, q);
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - begin).count();
+}
+
+std::vector<Row> measure(const std::vector<Contender>& contenders, const std::vector<KindSet>& sets, int passes) {
+  std::vector<Row> rows;
+  std::uint64_t sink = 0;
+  for (const Contender& c : contenders) {
+    Row all{c.name, "all"};
+    std::vector<double> all_seconds(passes, 0.0);
+    bool complete = true;
+    for (const KindSet& set : sets) {
+      if ((set.kind == QueryKind::VertexFace && !c.vertex_face) || (set.kind == QueryKind::EdgeEdge && !c.edge_edge)) {
+        complete = false;
+        continue;
+      }
+      Row row{c.name, std::string(kind_name(set.kind))};
+      row.queries = set.queries.size();
+      row.has_truth = !set.truth.empty();
+      for (std::size_t i = 0; i < set.queries.size(); ++i) {
+        const bool hit = c.test(set.kind, set.queries[i]);
+        row.hits += hit;
+        if (row.has_truth) {
+          row.false_negatives += !hit && set.truth[i];
+          row.false_positives += hit && !set.truth[i];
+        }
+      }
+      std::vector<double> seconds;
+      for (int p = 0; p < passes; ++p) {
+        seconds.push_back(seconds_for(c, set, sink));
+        all_seconds[p] += seconds.back();
+      }
+      row.ns_per_query = 1e9 * median(seconds) / row.queries;
+      all.queries += row.queries;
+      all.hits += row.hits;
+      all.false_negatives += row.false_negatives;
+      all.false_positives += row.false_positives;
+      all.has_truth = row.has_truth;
+      rows.push_back(row);
+    }
+    if (complete) {
+      all.ns_per_query = 1e9 * median(all_seconds) / all.queries;
+      rows.push_back(all);
+    }
+  }
+  if (sink == std::uint64_t(-1)) std::puts("");  // keeps the timed calls observable
+  return rows;
+}
+
+const Row* find(const std::vector<Row>& rows, const std::string& contender, const std::string& kind) {
+  for (const Row& r : rows)
+    if (r.contender == contender && r.kind == kind) return &r;
+  return nullptr;
+}
+
+void print(const std::string& title, const std::vector<Row>& rows) {
+  std::printf("\n%s\n", title.c_str());
+  std::printf("%-17s %-12s %8s %7s %9s %9s %10s %12s\n", "method", "kind", "queries", "hits", "false_neg", "false_pos",
+              "ns/query", "vincent is");
+  for (const Row& r : rows) {
+    const Row* vincent = find(rows, "vincent", r.kind);
+    char truth[2][16] = {"-", "-"};
+    if (r.has_truth) {
+      std::snprintf(truth[0], 16, "%zu", r.false_negatives);
+      std::snprintf(truth[1], 16, "%zu", r.false_positives);
+    }
+    std::printf("%-17s %-12s %8zu %7zu %9s %9s %10.1f %11.2fx\n", r.contender.c_str(), r.kind.c_str(), r.queries,
+                r.hits, truth[0], truth[1], r.ns_per_query, vincent ? r.ns_per_query / vincent->ns_per_query : 0.0);
+  }
+}
+
+void target(bool met, const std::string& text) { std::printf("  [%s] %s\n", met ? "met" : "NOT MET", text.c_str()); }
+
+// The slowest single query: the median of repeated runs of each query, maximised.
+std::pair<double, std::string> slowest_query(const std::vector<QueryFile>& files, Method method) {
+  Options options;
+  options.method = method;
+  double worst = 0;
+  std::string where;
+  for (const QueryFile& f : files) {
+    for (std::size_t i = 0; i < f.queries.size(); ++i) {
+      std::vector<double> ns;
+      for (int rep = 0; rep < 5; ++rep) {
+        const auto begin = std::chrono::steady_clock::now();
+        volatile bool hit = elementary_ccd(f.kind, f.queries[i], options).hit;
+        (void)hit;
+        ns.push_back(std::chrono::duration<double, std::nano>(std::chrono::steady_clock::now() - begin).count());
+      }
+      const double m = median(ns);
+      if (m > worst) worst = m, where = f.path.string() + " query " + std::to_string(i);
+    }
+  }
+  return {worst, where};
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  CLI::App app{"Nanoseconds per elementary CCD test: drape's methods beside FCL and Bullet, on identical queries."};
+  int passes = 15;
+  int grid = 24;
+  std::string data = DRAPE_TEST_DATA "/ccd-queries";
+  app.add_option("--passes", passes, "Timed passes; medians are reported")->check(CLI::Range(1, 1000))->capture_default_str();
+  app.add_option("--grid", grid, "Cloth-like set: grid cells per side")->check(CLI::Range(2, 200))->capture_default_str();
+  app.add_option("--data", data, "Folder of ground-truth query files")->check(CLI::ExistingDirectory)->capture_default_str();
+  CLI11_PARSE(app, argc, argv);
+
+  std::vector<Contender> contenders;
+  for (Method m : ALL_METHODS) {
+    contenders.push_back({std::string(method_name(m)), true, true, [m](QueryKind kind, const Query& q) {
+                            Options options;
+                            options.method = m;
+                            return elementary_ccd(kind, q, options).hit;
+                          }});
+  }
+  for (const auto& peer : bench::available_peers())
+    contenders.push_back({peer.name, peer.vertex_face, peer.edge_edge, peer.test});
+
+  // (a) The public queries with ground truth.
+  std::vector<QueryFile> files;
+  for (const auto& entry : std::filesystem::recursive_directory_iterator(data))
+    if (entry.path().extension() == ".csv") files.push_back(read_query_file(entry.path()));
+  std::sort(files.begin(), files.end(), [](const auto& a, const auto& b) { return a.path < b.path; });
+  std::vector<KindSet> shared{{QueryKind::VertexFace, {}, {}}, {QueryKind::EdgeEdge, {}, {}}};
+  for (const QueryFile& f : files) {
+    KindSet& set = shared[f.kind == QueryKind::VertexFace ? 0 : 1];
+    set.queries.insert(set.queries.end(), f.queries.begin(), f.queries.end());
+    set.truth.insert(set.truth.end(), f.truth.begin(), f.truth.end());
+  }
+  // (b) The cloth-like set.
+  const ClothLikeSet cloth = cloth_like_set(grid, 2026);
+  const std::vector<KindSet> cloth_sets{{QueryKind::VertexFace, gather_queries(cloth, QueryKind::VertexFace), {}},
+                                        {QueryKind::EdgeEdge, gather_queries(cloth, QueryKind::EdgeEdge), {}}};
+
+  std::printf("ccd_bench: %d timed passes per method, medians; one thread.\n", passes);
+  const auto shared_rows = measure(contenders, shared, passes);
+  print("(a) public ground-truth queries (" + data + ")", shared_rows);
+  const auto cloth_rows = measure(contenders, cloth_sets, passes);
+  print("(b) cloth-like set: " + std::to_string(grid) + "x" + std::to_string(grid) +
+            " jittered grid and a folded sheet (" + std::to_string(cloth.start.size()) + " vertices)",
+        cloth_rows);
+
+  std::printf("\nTargets\n");
+  const auto ns = [](const std::vector<Row>& rows, const std::string& name) {
+    const Row* r = find(rows, name, "all");
+    return r ? r->ns_per_query : 0.0;
+  };
+  const double vincent = ns(cloth_rows, "vincent");
+  std::printf("  cloth-like: cubic/vincent = %.2fx, dnf/vincent = %.2fx, conservative/vincent = %.2fx\n",
+              ns(cloth_rows, "cubic") / vincent, ns(cloth_rows, "dnf") / vincent,
+              ns(cloth_rows, "conservative") / vincent);
+  target(ns(cloth_rows, "cubic") >= 5 * vincent, "cloth-like: vincent at least 5x faster than cubic");
+  target(ns(cloth_rows, "dnf") > vincent, "cloth-like: vincent faster than dnf");
+  if (find(cloth_rows, "fcl-filtered", "all"))
+    target(ns(cloth_rows, "fcl-filtered") > vincent, "cloth-like: vincent faster than FCL's filtered functions");
+  target(ns(cloth_rows, "conservative") <= 2 * vincent, "cloth-like: conservative at most 2x vincent");
+  const Row* conservative = find(shared_rows, "conservative", "all");
+  target(conservative->false_negatives == 0, "shared files: conservative misses no contact (" +
+                                                 std::to_string(conservative->false_negatives) + " missed)");
+  const double fp_rate = 100.0 * conservative->false_positives / conservative->queries;
+  char text[160];
+  std::snprintf(text, sizeof text, "shared files: conservative false positives %.2f%% of queries (Tight Inclusion: about 3%%)",
+                fp_rate);
+  target(fp_rate < 3.0, text);
+  std::snprintf(text, sizeof text, "shared files: conservative mean %.0f ns a query (under 1000)", conservative->ns_per_query);
+  target(conservative->ns_per_query < 1000, text);
+  const auto [worst, where] = slowest_query(files, Method::Conservative);
+  std::snprintf(text, sizeof text, "shared files: conservative slowest query %.1f us (under 100; %s)", worst / 1e3,
+                where.c_str());
+  target(worst < 100e3, text);
+  return 0;
+}
