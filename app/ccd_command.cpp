@@ -41,7 +41,7 @@ std::vector<fs::path> expand_inputs(const std::vector<std::string>& inputs) {
   return files;
 }
 
-void print_table(const std::vector<ccd::EvaluationRow>& rows) {
+void print_table(const std::vector<ccd::EvaluationRow>& rows, int passes) {
   std::printf("%-13s %-12s %8s %9s %8s %8s %8s %8s %11s\n", "method", "kind", "queries", "positives", "true_pos",
               "false_neg", "false_pos", "culled", "ns/query");
   for (const auto& r : rows) {
@@ -54,8 +54,8 @@ void print_table(const std::vector<ccd::EvaluationRow>& rows) {
   }
   std::printf(
       "\nfalse_neg: contacts missed; false_pos: contacts reported that are not there; culled: decided by the\n"
-      "filter with no root finding; ns/query: median over %s timed passes on one thread.\n",
-      "the");
+      "filter with no root finding; ns/query: median over %d timed passes on one thread.\n",
+      passes);
 }
 
 void print_json(const std::vector<ccd::EvaluationRow>& rows) {
@@ -90,7 +90,7 @@ int run_ccd(const CcdArguments& args) {
   }
   const auto rows = ccd::evaluate_methods(files, settings);
   if (args.json) print_json(rows);
-  else print_table(rows);
+  else print_table(rows, settings.passes);
   return EXIT_OK;
 }
 
@@ -132,7 +132,7 @@ Command add_ccd_command(CLI::App& app) {
       ->check(CLI::NonNegativeNumber)
       ->capture_default_str();
   cmd->add_option("--contact-tolerance", o.contact_tolerance,
-                  "cubic/dnf/vincent: distance at a root counted as contact, relative to the query's size")
+                  "cubic/dnf/vincent: distance at a root counted as contact, relative to the query's extent")
       ->check(CLI::NonNegativeNumber)
       ->capture_default_str();
   cmd->add_option("--root-tolerance", o.root_tolerance, "Width at which a root bracket is final (step units)")

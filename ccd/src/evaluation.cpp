@@ -55,6 +55,7 @@ std::vector<EvaluationRow> evaluate_methods(const std::vector<QueryFile>& files,
         row.false_positives += r.hit && !set.truth[i];
         row.culled += r.path == Path::Culled;
       }
+      time_pass(set, options, sink);  // warm-up: caches and clock frequency
       std::vector<double> seconds;
       for (int pass = 0; pass < std::max(settings.passes, 1); ++pass) {
         seconds.push_back(time_pass(set, options, sink));

@@ -25,7 +25,7 @@ struct EvaluationRow {
 struct EvaluationSettings {
   std::vector<Method> methods{ALL_METHODS.begin(), ALL_METHODS.end()};
   Options options;     ///< method is overridden by each of methods
-  int passes = 9;      ///< timed passes over all queries; the median is reported
+  int passes = 15;     ///< timed passes over all queries; the median is reported
 };
 
 /// Rows ordered by method, then vertex-face, edge-edge, all (kinds with no query are skipped,
