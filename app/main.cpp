@@ -1,24 +1,31 @@
 // drape: a cloth simulator built around a fast algebraic filter for continuous collision
 // detection. This file only dispatches to the subcommands.
 #include <iostream>
+#include <map>
 
 #include "commands.h"
-#include "drape/core/version.h"
 
 int main(int argc, char** argv) {
   CLI::App app{
       "drape: cloth simulation with continuous collision detection.\n"
       "Run 'drape <command> --help' for the options of a command.",
       "drape"};
-  app.set_version_flag("--version", std::string(drape::version()));
+  app.set_version_flag("--version", DRAPE_VERSION);
   app.require_subcommand(1);
   app.footer(
       "Exit status: 0 success, 1 a check found a problem, 2 bad input (flag, scene, mesh or\n"
-      "query file), 3 a simulation had to stop.\n\n"
-      "Example:\n"
-      "  drape ccd --method all tests/data/ccd-queries   compare the CCD methods on ground truth");
+      "query file), 3 a simulation had to stop or was interrupted (what it wrote is kept).\n\n"
+      "Examples:\n"
+      "  drape run scenes/drape_sphere.json             simulate; frames and stats.csv in out/drape_sphere\n"
+      "  drape validate scenes/flag.json                check a scene without running it\n"
+      "  drape check-stats out/flag/stats.csv golden.csv compare frame statistics\n"
+      "  drape ccd tests/data/ccd-queries               compare the CCD methods on ground truth");
 
-  const auto ccd = drape::app::add_ccd_command(app);
+  std::map<std::string, drape::app::Command> commands;
+  commands["run"] = drape::app::add_run_command(app);
+  commands["validate"] = drape::app::add_validate_command(app);
+  commands["check-stats"] = drape::app::add_check_stats_command(app);
+  commands["ccd"] = drape::app::add_ccd_command(app);
 
   try {
     app.parse(argc, argv);
@@ -26,11 +33,7 @@ int main(int argc, char** argv) {
     const int status = app.exit(e);
     return status == 0 ? drape::app::EXIT_OK : drape::app::EXIT_BAD_INPUT;
   }
-  try {
-    if (app.got_subcommand("ccd")) return ccd();
-  } catch (const std::exception& e) {
-    std::cerr << "drape: " << e.what() << "\n";
-    return drape::app::EXIT_BAD_INPUT;
-  }
+  for (const auto& [name, command] : commands)
+    if (app.got_subcommand(name)) return command();
   return drape::app::EXIT_OK;
 }

@@ -7,45 +7,32 @@
 #include <fstream>
 #include <nlohmann/json.hpp>
 #include <set>
-#include <sys/wait.h>
-#include <unistd.h>
+
+#include "drape_process.h"
 
 namespace fs = std::filesystem;
 
 namespace {
 
-struct Outcome {
-  int status = -1;
-  std::string output;  // stdout and stderr together
-};
-
-Outcome drape(const std::string& arguments) {
-  const std::string command = std::string(DRAPE_EXECUTABLE) + " " + arguments + " 2>&1";
-  Outcome run;
-  FILE* pipe = popen(command.c_str(), "r");
-  std::array<char, 4096> buffer{};
-  while (std::size_t n = fread(buffer.data(), 1, buffer.size(), pipe)) run.output.append(buffer.data(), n);
-  const int status = pclose(pipe);
-  run.status = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-  return run;
-}
+using drape::testing::run_drape;
+using drape::testing::Outcome;
 
 std::string data(const std::string& relative) { return std::string(DRAPE_TEST_DATA) + "/ccd-queries/" + relative; }
 
 }  // namespace
 
 TEST(CcdCommand, HelpTeaches) {
-  const Outcome top = drape("--help");
+  const Outcome top = run_drape("--help");
   EXPECT_EQ(top.status, 0);
   EXPECT_NE(top.output.find("ccd"), std::string::npos);
-  const Outcome ccd = drape("ccd --help");
+  const Outcome ccd = run_drape("ccd --help");
   EXPECT_EQ(ccd.status, 0);
   for (const char* word : {"cubic", "dnf", "vincent", "conservative", "--json", "--kind", "Examples"})
     EXPECT_NE(ccd.output.find(word), std::string::npos) << word;
 }
 
 TEST(CcdCommand, JsonHasExactlyTheDocumentedKeys) {
-  const Outcome run = drape("ccd --passes 1 --json " + data("unit-tests"));
+  const Outcome run = run_drape("ccd --passes 1 --json " + data("unit-tests"));
   ASSERT_EQ(run.status, 0) << run.output;
   const auto doc = nlohmann::json::parse(run.output);
   ASSERT_TRUE(doc.is_array());
@@ -76,7 +63,7 @@ TEST(CcdCommand, JsonHasExactlyTheDocumentedKeys) {
 }
 
 TEST(CcdCommand, OneMethodAndAnExplicitKind) {
-  const Outcome run = drape("ccd --passes 1 --method vincent --kind edge-edge --json " +
+  const Outcome run = run_drape("ccd --passes 1 --method vincent --kind edge-edge --json " +
                         data("unit-tests/edge-edge/data_0_1.csv"));
   ASSERT_EQ(run.status, 0) << run.output;
   const auto doc = nlohmann::json::parse(run.output);
@@ -86,7 +73,7 @@ TEST(CcdCommand, OneMethodAndAnExplicitKind) {
 }
 
 TEST(CcdCommand, TablePrintsEveryMethod) {
-  const Outcome run = drape("ccd --passes 1 " + data("erleben-wedges"));
+  const Outcome run = run_drape("ccd --passes 1 " + data("erleben-wedges"));
   ASSERT_EQ(run.status, 0) << run.output;
   for (const char* word : {"cubic", "dnf", "vincent", "conservative", "false_neg", "ns/query"})
     EXPECT_NE(run.output.find(word), std::string::npos) << word;
@@ -96,15 +83,15 @@ TEST(CcdCommand, BadInputExitsWithStatusTwo) {
   const fs::path dir = fs::temp_directory_path() / ("drape_ccd_cmd_" + std::to_string(::getpid())) / "edge-edge";
   fs::create_directories(dir);
   std::ofstream(dir / "bad.csv") << "0,1,0,1,0,1,0\n0,1,0,1,0,1\n";
-  const Outcome bad = drape("ccd " + (dir / "bad.csv").string());
+  const Outcome bad = run_drape("ccd " + (dir / "bad.csv").string());
   EXPECT_EQ(bad.status, 2);
   EXPECT_NE(bad.output.find((dir / "bad.csv").string() + ":2:"), std::string::npos) << bad.output;
 
-  EXPECT_EQ(drape("ccd /nonexistent.csv").status, 2);
-  EXPECT_EQ(drape("ccd --method quartic " + data("unit-tests")).status, 2);
-  EXPECT_EQ(drape("ccd --passes 0 " + data("unit-tests")).status, 2);
-  EXPECT_EQ(drape("ccd").status, 2);
-  EXPECT_EQ(drape("frobnicate").status, 2);
-  const Outcome no_kind = drape("ccd " + fs::temp_directory_path().string() + "/../" + (dir / "bad.csv").string());
+  EXPECT_EQ(run_drape("ccd /nonexistent.csv").status, 2);
+  EXPECT_EQ(run_drape("ccd --method quartic " + data("unit-tests")).status, 2);
+  EXPECT_EQ(run_drape("ccd --passes 0 " + data("unit-tests")).status, 2);
+  EXPECT_EQ(run_drape("ccd").status, 2);
+  EXPECT_EQ(run_drape("frobnicate").status, 2);
+  const Outcome no_kind = run_drape("ccd " + fs::temp_directory_path().string() + "/../" + (dir / "bad.csv").string());
   EXPECT_EQ(no_kind.status, 2);
 }

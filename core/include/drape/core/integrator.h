@@ -1,0 +1,60 @@
+#pragma once
+/// \file
+/// The state of a run and the implicit step: linearised backward Euler (Baraff and Witkin,
+/// "Large steps in cloth simulation", SIGGRAPH 1998):
+///     (M - h dF/dv - h^2 dF/dx) dv = h (F + h dF/dx v),   v += dv,   x += h v,
+/// with pinned and scripted vertices eliminated from the system (their dv is prescribed and
+/// moved to the right-hand side), then the analytic obstacles' contact response.
+
+#include <memory>
+#include <string>
+
+#include "drape/core/linear_solver.h"
+#include "drape/core/model.h"
+
+namespace drape {
+
+struct State {
+  std::vector<Vec3> positions;
+  std::vector<Vec3> velocities;
+  Scalar time = 0;
+  long steps = 0;
+};
+
+/// Everything at rest at the initial positions, time 0.
+State initial_state(const Model& model);
+
+struct StepReport {
+  bool ok = true;
+  std::string failure;        ///< why the run must stop, when !ok
+  int solver_iterations = 0;
+  bool solver_converged = true;
+  double solve_ms = 0;        ///< assembly excluded
+  int obstacle_contacts = 0;  ///< vertices projected out of analytic obstacles
+};
+
+/// Holds what a run reuses from step to step: the system's sparsity pattern with each spring's
+/// place in it, and the linear solver (whose symbolic analysis CHOLMOD keeps).
+class Integrator {
+ public:
+  Integrator(const Model& model, std::unique_ptr<LinearSolver> solver);
+  ~Integrator();
+  /// One step of the scene's timestep: forces -> implicit solve -> obstacle response -> checks.
+  StepReport step(State& state);
+  const LinearSolver& solver() const { return *solver_; }
+
+ private:
+  struct Workspace;
+  const Model& model_;
+  std::unique_ptr<LinearSolver> solver_;
+  std::unique_ptr<Workspace> work_;
+};
+
+/// Diagnostics for the frame statistics.
+Scalar kinetic_energy(const Model& model, const State& state);
+/// Spring energy plus gravitational energy (relative to height zero along gravity).
+Scalar potential_energy(const Model& model, const State& state);
+/// Largest stretch-spring length over rest length (1 when no stretch spring).
+Scalar max_stretch(const Model& model, const State& state);
+
+}  // namespace drape

@@ -1,0 +1,38 @@
+#pragma once
+/// \file
+/// The sparse solve of the implicit step, behind one interface: SuiteSparse CHOLMOD (a sparse
+/// Cholesky factorisation whose symbolic analysis is reused while the matrix's pattern stays
+/// the same) or Eigen's conjugate gradient with a Jacobi preconditioner.
+
+#include <Eigen/SparseCore>
+#include <memory>
+#include <string>
+
+#include "drape/core/scene.h"
+
+namespace drape {
+
+using SparseMatrix = Eigen::SparseMatrix<Scalar>;
+using VectorX = Eigen::Matrix<Scalar, Eigen::Dynamic, 1>;
+
+struct SolveReport {
+  bool ok = true;
+  bool converged = true;  ///< cg: reached its tolerance within the iteration cap
+  int iterations = 0;     ///< cg iterations; 1 for a direct solve
+  Scalar residual = 0;    ///< cg: relative residual reached
+  std::string error;      ///< why the solve failed, when !ok
+};
+
+class LinearSolver {
+ public:
+  virtual ~LinearSolver() = default;
+  /// Solves A x = b for a symmetric positive definite A (both triangles stored). x holds a
+  /// starting guess on entry (used by iterative solvers).
+  virtual SolveReport solve(const SparseMatrix& A, const VectorX& b, VectorX& x) = 0;
+  /// How many times the symbolic analysis ran (direct solvers); 0 for iterative ones.
+  virtual int analyses() const { return 0; }
+};
+
+std::unique_ptr<LinearSolver> make_linear_solver(const SolverSpec& spec);
+
+}  // namespace drape

@@ -1,0 +1,36 @@
+#pragma once
+/// \file
+/// Mesh files in and out, through assimp (OBJ, PLY, STL, glTF, Collada, ...). assimp stays
+/// behind these two functions.
+
+#include <filesystem>
+#include <stdexcept>
+#include <string>
+
+#include "drape/core/mesh.h"
+
+namespace drape {
+
+/// A mesh file that cannot be read or written. what() names the file and the problem.
+class MeshFileError : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+/// Reads every triangle of the file into one mesh, welding vertices at identical positions
+/// (formats like OBJ repeat a position for each normal or texture coordinate).
+/// Throws MeshFileError; does not validate the mesh (see mesh_problem).
+TriangleMesh load_mesh(const std::filesystem::path& path);
+
+/// Writes the mesh atomically (a temporary file renamed into place), so a reader never sees a
+/// truncated mesh. format: "obj" (without a material file), "ply", "stl", or any assimp export
+/// format id. Throws MeshFileError.
+void save_mesh(const std::filesystem::path& path, const TriangleMesh& mesh, const std::string& format);
+
+/// The file extension of a save_mesh format ("obj" -> ".obj").
+std::string mesh_extension(const std::string& format);
+
+/// Whether assimp can export this format.
+bool mesh_format_supported(const std::string& format);
+
+}  // namespace drape

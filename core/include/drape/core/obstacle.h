@@ -1,0 +1,30 @@
+#pragma once
+/// \file
+/// Obstacles posed at a time: where the analytic shapes are, how far a point is from them, and
+/// how fast their surface moves.
+
+#include "drape/core/model.h"
+
+namespace drape {
+
+/// The closest surface point's data for a point near an analytic obstacle.
+struct SurfaceContact {
+  Scalar signed_distance = 0;        ///< positive on the free side
+  Vec3 normal = Vec3::UnitZ();       ///< unit, pointing to the free side
+  Vec3 surface_velocity = Vec3::Zero();
+};
+
+/// Sphere or plane at time t, seen from x.
+SurfaceContact analytic_contact(const Obstacle& obstacle, Scalar t, const Vec3& x);
+
+/// The velocity at time t of the obstacle's body point now at x (translation plus rotation).
+Vec3 body_velocity(const Motion& motion, const Vec3& x_now, Scalar t);
+
+/// A mesh obstacle's vertices at time t.
+std::vector<Vec3> posed_vertices(const Obstacle& obstacle, Scalar t);
+
+/// Smallest distance from any of the points to the obstacle at time t (signed for analytic
+/// shapes: negative inside).
+Scalar distance_to_obstacle(const Obstacle& obstacle, Scalar t, const std::vector<Vec3>& points);
+
+}  // namespace drape

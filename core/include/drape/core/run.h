@@ -1,0 +1,59 @@
+#pragma once
+/// \file
+/// A run: frames of steps, each frame's mesh and statistics row written as soon as it is done,
+/// so a run that stops keeps everything finished before it.
+
+#include <atomic>
+#include <filesystem>
+#include <functional>
+#include <optional>
+#include <string>
+
+#include "drape/core/integrator.h"
+
+namespace drape {
+
+/// One row of stats.csv. Columns, in order: see stats_header().
+struct FrameStats {
+  int frame = 0;
+  Scalar sim_time = 0;
+  double wall_ms = 0;          ///< the frame's steps, output excluded
+  double solve_ms = 0;         ///< linear solves only
+  long solver_iterations = 0;  ///< summed over the frame's steps (1 per CHOLMOD solve)
+  Scalar kinetic_energy = 0;
+  Scalar potential_energy = 0;
+  Scalar max_stretch = 1;
+  std::optional<Scalar> min_distance_obstacle;  ///< empty when the scene has no obstacle
+  int obstacle_contacts = 0;   ///< vertex projections out of analytic obstacles, summed
+  int solver_warnings = 0;     ///< cg solves that stopped at the iteration cap
+};
+
+std::string stats_header();
+std::string stats_row(const FrameStats& stats);
+
+struct RunSettings {
+  std::filesystem::path out;  ///< output folder (created)
+  int frames = 0;             ///< frames to simulate after frame 0 (the initial state)
+  bool write_meshes = true;
+};
+
+enum class RunEnd { Completed, Stopped, Interrupted };
+
+struct RunOutcome {
+  RunEnd end = RunEnd::Completed;
+  int frames_done = 0;  ///< frames simulated and written (frame 0 not counted)
+  std::string message;  ///< for Stopped and Interrupted: which frame and why
+};
+
+/// Output files of a run folder.
+std::filesystem::path mesh_path(const std::filesystem::path& out, int frame, const std::string& format);
+inline std::filesystem::path stats_path(const std::filesystem::path& out) { return out / "stats.csv"; }
+
+/// Simulates and writes frame 0 (the initial state) then settings.frames frames: the meshes,
+/// stats.csv, and a copy of the scene (scene.json). interrupt is polled between steps.
+/// on_frame is called after each frame is written. Throws std::runtime_error when the output
+/// folder cannot be written.
+RunOutcome run_simulation(const Model& model, const RunSettings& settings, const std::atomic<bool>& interrupt,
+                          const std::function<void(const FrameStats&)>& on_frame);
+
+}  // namespace drape

@@ -1,0 +1,162 @@
+#pragma once
+/// \file
+/// The scene: what a JSON scene file describes, validated, with every default in the structs.
+/// Immutable once loaded; what changes during a run lives in the simulation state.
+///
+/// The vocabulary follows ARCSim's scene files (frame_time, frame_steps or timestep, end_time
+/// or frames, gravity, cloths, obstacles, handles, wind, friction) plus drape's own sections
+/// (material, solver, collisions, output, render). docs/scenes.md describes every key.
+
+#include <filesystem>
+#include <limits>
+#include <optional>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "drape/ccd/query.h"
+#include "drape/core/grid.h"
+
+namespace drape {
+
+/// A scene file that is malformed. what() names the file, the JSON path and what was expected
+/// (for a syntax error, the line and column).
+class SceneError : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+/// x' = R (scale x) + translate, R a rotation of rotate_degrees about rotate_axis (ARCSim's
+/// "rotate": [degrees, x, y, z]).
+struct Transform {
+  Vec3 translate = Vec3::Zero();
+  Scalar rotate_degrees = 0;
+  Vec3 rotate_axis = Vec3::UnitZ();
+  Scalar scale = 1;
+  Vec3 apply(const Vec3& x) const;
+};
+
+/// A rigid scripted motion, active between start and end (seconds): translation at a constant
+/// velocity and rotation at a constant angular velocity (axis times radians per second) about
+/// a centre that travels with the translation.
+struct Motion {
+  Vec3 velocity = Vec3::Zero();
+  Vec3 angular_velocity = Vec3::Zero();
+  Vec3 center = Vec3::Zero();
+  Scalar start = 0;
+  Scalar end = std::numeric_limits<Scalar>::infinity();
+  /// Where a point at x at time 0 is at time t.
+  Vec3 position(const Vec3& x, Scalar t) const;
+  /// The velocity at time t of the point that was at x at time 0.
+  Vec3 velocity_at(const Vec3& x, Scalar t) const;
+  bool moves() const { return !velocity.isZero() || !angular_velocity.isZero(); }
+};
+
+/// Per-cloth material. Spring constants follow from these and each spring's rest length L:
+/// k = stiffness / L, so a force is stiffness times strain and the cloth behaves alike at any
+/// resolution. A stiffness of zero creates no springs of that kind.
+struct Material {
+  Scalar density = 0.15;   ///< kg per square metre of cloth
+  Scalar stretch = 2000;   ///< N: structural springs (grid axes; every edge of an imported mesh)
+  Scalar shear = 200;      ///< N: both diagonals of each grid quad (grids only)
+  Scalar bend = 2;         ///< N: springs across one vertex (grids) or across each interior edge
+  Scalar damping = 0.002;  ///< s: each spring's damping is this times its stiffness
+  /// 1/s: still air's drag on each particle, -air_damping m (v - wind velocity); it is what
+  /// brings a swinging cloth to rest (spring damping does not damp rigid swinging).
+  Scalar air_damping = 0.1;
+};
+
+struct ClothSpec {
+  std::optional<GridSpec> grid;       ///< the built-in grid generator, or
+  std::filesystem::path mesh_file;    ///< a mesh read by assimp (resolved against the scene's folder)
+  Transform transform;
+  Material material;
+};
+
+struct Box {
+  Vec3 min = Vec3::Zero();
+  Vec3 max = Vec3::Zero();
+  bool contains(const Vec3& x) const { return (x.array() >= min.array()).all() && (x.array() <= max.array()).all(); }
+};
+
+/// Pinned vertices of one cloth, chosen by index, by grid corner name or by a box around their
+/// initial positions; they follow motion when given, else stay put.
+struct HandleSpec {
+  int cloth = 0;
+  std::vector<int> nodes;
+  std::vector<std::string> corners;
+  std::optional<Box> box;
+  Motion motion;
+};
+
+struct ObstacleSpec {
+  enum class Kind { Sphere, Plane, Mesh };
+  Kind kind = Kind::Plane;
+  Vec3 center = Vec3::Zero();  ///< sphere
+  Scalar radius = 1;           ///< sphere
+  Vec3 point = Vec3::Zero();   ///< plane: a point on it
+  Vec3 normal = Vec3::UnitZ(); ///< plane: unit normal, the free side
+  std::filesystem::path mesh_file;  ///< mesh (resolved against the scene's folder)
+  Transform transform;              ///< mesh
+  Motion motion;
+};
+
+/// Air flowing at velocity: each triangle feels a drag along its normal,
+/// 0.5 density drag area |w_n| w_n, with w_n the normal component of the relative velocity.
+struct WindSpec {
+  Vec3 velocity = Vec3::Zero();  ///< m/s
+  Scalar density = 1.2;          ///< kg/m^3 (air)
+  Scalar drag = 1.0;             ///< dimensionless drag coefficient
+};
+
+enum class SolverKind { Cholmod, ConjugateGradient };
+
+struct SolverSpec {
+  SolverKind kind = SolverKind::Cholmod;
+  Scalar tolerance = 1e-8;  ///< cg: relative residual at which it stops
+  int max_iterations = 2000;  ///< cg: iteration cap
+};
+
+struct CollisionSpec {
+  bool self = false;
+  bool obstacles = true;
+  Scalar thickness = 0.005;  ///< m: the gap kept between cloth and anything it touches
+  ccd::Method method = ccd::Method::Vincent;
+};
+
+struct OutputSpec {
+  std::filesystem::path folder;  ///< default: out/<scene file name without extension>
+  std::string mesh_format = "obj";
+  bool meshes = true;            ///< write the cloth mesh of every frame
+};
+
+struct Scene {
+  std::filesystem::path file;  ///< the scene file, when read from one
+  std::string comment;
+  Scalar frame_time = 1.0 / 30;  ///< s
+  int frame_steps = 10;          ///< implicit steps per frame
+  int frames = 60;
+  Vec3 gravity = Vec3(0, 0, -9.81);
+  std::vector<ClothSpec> cloths;
+  std::vector<HandleSpec> handles;
+  std::vector<ObstacleSpec> obstacles;
+  std::optional<WindSpec> wind;
+  Scalar friction = 0.3;  ///< Coulomb coefficient between cloth and obstacles
+  SolverSpec solver;
+  CollisionSpec collisions;
+  OutputSpec output;
+  /// The run stops (exploded) when a cloth vertex leaves this box; default: the initial
+  /// bounding box of everything, grown by 100 times its diagonal.
+  std::optional<Box> bounds;
+  std::string render_json;  ///< the render section, kept verbatim for the renderer
+
+  Scalar timestep() const { return frame_time / frame_steps; }
+};
+
+/// Reads and validates a scene file. Throws SceneError.
+Scene load_scene(const std::filesystem::path& path);
+
+/// Parses scene text; file names the source in messages and anchors relative mesh paths.
+Scene parse_scene(const std::string& text, const std::filesystem::path& file);
+
+}  // namespace drape

@@ -1,0 +1,35 @@
+#pragma once
+/// \file
+/// Compares a run's stats.csv with a golden one, column by column, with per-column tolerances.
+
+#include <filesystem>
+#include <map>
+#include <optional>
+#include <string>
+
+namespace drape {
+
+/// |a - b| <= absolute + relative * max(|a|, |b|); ignore skips the column (timings).
+struct ColumnTolerance {
+  double absolute = 0;
+  double relative = 0;
+  bool ignore = false;
+};
+
+/// The tolerances drape uses, by column name; columns not listed get default_tolerance().
+const std::map<std::string, ColumnTolerance>& stats_tolerances();
+ColumnTolerance default_tolerance();
+
+struct StatsDifference {
+  int row = 0;  ///< data row (0 = first frame row); -1 for a header or row-count difference
+  std::string frame;
+  std::string column;
+  std::string run_value, golden_value;
+  std::string message;  ///< a sentence saying what differs and the tolerance
+};
+
+/// The first difference beyond tolerance, or nullopt when the files agree. Throws
+/// std::runtime_error when a file cannot be read.
+std::optional<StatsDifference> compare_stats(const std::filesystem::path& run, const std::filesystem::path& golden);
+
+}  // namespace drape

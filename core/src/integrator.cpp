@@ -1,0 +1,244 @@
+#include "drape/core/integrator.h"
+
+#include <chrono>
+
+#include "drape/core/obstacle.h"
+
+namespace drape {
+
+State initial_state(const Model& model) {
+  State s;
+  s.positions = model.initial_positions;
+  s.velocities.assign(model.vertex_count(), Vec3::Zero());
+  return s;
+}
+
+// The system matrix over the free vertices, with the place of every 3x3 block in its
+// compressed storage: a block (a, b) occupies rows 3a..3a+2 of columns 3b..3b+2, and the three
+// rows of one column are contiguous, so the offset of row 3a in each column is enough.
+struct Integrator::Workspace {
+  std::vector<int> free_index;               // vertex -> free vertex index, or -1 if pinned
+  int free_count = 0;
+  SparseMatrix matrix;
+  std::vector<std::array<int, 3>> diagonal;  // free vertex -> offsets of its (a, a) block
+  struct SpringBlocks {
+    std::array<int, 3> ij{-1, -1, -1}, ji{-1, -1, -1};
+  };
+  std::vector<SpringBlocks> spring_blocks;
+  VectorX rhs, solution;
+  std::vector<Vec3> forces;
+
+  std::array<int, 3> block(int a, int b) const {
+    std::array<int, 3> offsets{};
+    for (int c = 0; c < 3; ++c) {
+      const int column = 3 * b + c;
+      const auto* begin = matrix.innerIndexPtr() + matrix.outerIndexPtr()[column];
+      const auto* end = matrix.innerIndexPtr() + matrix.outerIndexPtr()[column + 1];
+      offsets[c] = int(std::lower_bound(begin, end, 3 * a) - matrix.innerIndexPtr());
+    }
+    return offsets;
+  }
+  void add_block(const std::array<int, 3>& offsets, const Mat3& value) {
+    Scalar* values = matrix.valuePtr();
+    for (int c = 0; c < 3; ++c)
+      for (int r = 0; r < 3; ++r) values[offsets[c] + r] += value(r, c);
+  }
+};
+
+Integrator::Integrator(const Model& model, std::unique_ptr<LinearSolver> solver)
+    : model_(model), solver_(std::move(solver)), work_(std::make_unique<Workspace>()) {
+  Workspace& w = *work_;
+  const int n = int(model.vertex_count());
+  w.free_index.assign(n, -1);
+  for (int v = 0; v < n; ++v)
+    if (model.pin_of_vertex[v] < 0) w.free_index[v] = w.free_count++;
+  std::vector<Eigen::Triplet<Scalar>> pattern;
+  const auto add_pattern = [&](int a, int b) {
+    for (int r = 0; r < 3; ++r)
+      for (int c = 0; c < 3; ++c) pattern.emplace_back(3 * a + r, 3 * b + c, 0.0);
+  };
+  for (int a = 0; a < w.free_count; ++a) add_pattern(a, a);
+  for (const Spring& s : model.springs) {
+    const int a = w.free_index[s.i], b = w.free_index[s.j];
+    if (a >= 0 && b >= 0) add_pattern(a, b), add_pattern(b, a);
+  }
+  w.matrix.resize(3 * w.free_count, 3 * w.free_count);
+  w.matrix.setFromTriplets(pattern.begin(), pattern.end());
+  w.matrix.makeCompressed();
+  w.diagonal.resize(w.free_count);
+  for (int a = 0; a < w.free_count; ++a) w.diagonal[a] = w.block(a, a);
+  w.spring_blocks.resize(model.springs.size());
+  for (std::size_t k = 0; k < model.springs.size(); ++k) {
+    const int a = w.free_index[model.springs[k].i], b = w.free_index[model.springs[k].j];
+    if (a >= 0 && b >= 0) w.spring_blocks[k] = {w.block(a, b), w.block(b, a)};
+  }
+  w.rhs.setZero(3 * w.free_count);
+  w.solution.setZero(3 * w.free_count);
+}
+
+Integrator::~Integrator() = default;
+
+namespace {
+
+// Air drag on each triangle along its normal, shared equally by its corners.
+void add_wind(const Model& model, const State& state, std::vector<Vec3>& forces) {
+  const WindSpec& wind = *model.scene.wind;
+  for (const Triangle& t : model.triangles) {
+    const Vec3 n = (state.positions[t[1]] - state.positions[t[0]]).cross(state.positions[t[2]] - state.positions[t[0]]);
+    const Scalar twice_area = n.norm();
+    if (!(twice_area > 0)) continue;
+    const Vec3 unit = n / twice_area;
+    const Vec3 relative = wind.velocity - (state.velocities[t[0]] + state.velocities[t[1]] + state.velocities[t[2]]) / 3;
+    const Scalar normal_speed = relative.dot(unit);
+    const Vec3 f = 0.5 * wind.density * wind.drag * (0.5 * twice_area) * std::abs(normal_speed) * normal_speed * unit;
+    for (int k = 0; k < 3; ++k) forces[t[k]] += f / 3;
+  }
+}
+
+// Inelastic projection out of spheres and planes, with Coulomb friction on the tangential
+// velocity relative to the surface (Bridson, Fedkiw and Anderson 2002, section 7.1).
+int respond_to_analytic_obstacles(const Model& model, State& state) {
+  const Scalar thickness = model.scene.collisions.thickness;
+  const Scalar mu = model.scene.friction;
+  int contacts = 0;
+  for (const Obstacle& obstacle : model.obstacles) {
+    if (obstacle.spec.kind == ObstacleSpec::Kind::Mesh) continue;  // the CCD pipeline's job
+    for (std::size_t v = 0; v < state.positions.size(); ++v) {
+      if (model.pin_of_vertex[v] >= 0) continue;
+      const SurfaceContact c = analytic_contact(obstacle, state.time, state.positions[v]);
+      if (c.signed_distance >= thickness) continue;
+      ++contacts;
+      state.positions[v] += (thickness - c.signed_distance) * c.normal;
+      const Vec3 relative = state.velocities[v] - c.surface_velocity;
+      const Scalar normal_speed = relative.dot(c.normal);
+      if (normal_speed >= 0) continue;  // already separating
+      Vec3 tangential = relative - normal_speed * c.normal;
+      const Scalar speed = tangential.norm();
+      if (speed > 0) tangential *= std::max<Scalar>(0, 1 - mu * -normal_speed / speed);
+      state.velocities[v] = c.surface_velocity + tangential;
+    }
+  }
+  return contacts;
+}
+
+}  // namespace
+
+StepReport Integrator::step(State& state) {
+  const Model& m = model_;
+  Workspace& w = *work_;
+  const Scalar h = m.scene.timestep();
+  const Scalar t_next = state.time + h;
+  const int n = int(m.vertex_count());
+  StepReport report;
+
+  // Prescribed velocities of the pinned vertices: to reach their scripted position at t + h.
+  std::vector<Vec3> pinned_dv(n, Vec3::Zero());
+  for (const Pin& pin : m.pins) {
+    const Vec3 target = m.scene.handles[pin.handle].motion.position(m.initial_positions[pin.vertex], t_next);
+    pinned_dv[pin.vertex] = (target - state.positions[pin.vertex]) / h - state.velocities[pin.vertex];
+  }
+
+  // Forces and the system matrix A = M - h dF/dv - h^2 dF/dx over the free vertices, and
+  // the right-hand side h (F + h dF/dx v) less A's coupling to the prescribed dv.
+  w.forces.assign(n, Vec3::Zero());
+  const Vec3 air_velocity = m.scene.wind ? m.scene.wind->velocity : Vec3::Zero();
+  for (int v = 0; v < n; ++v)
+    w.forces[v] = m.masses[v] * m.scene.gravity - m.air_damping[v] * m.masses[v] * (state.velocities[v] - air_velocity);
+  if (m.scene.wind) add_wind(m, state, w.forces);
+  std::fill(w.matrix.valuePtr(), w.matrix.valuePtr() + w.matrix.nonZeros(), 0.0);
+  for (int v = 0; v < n; ++v)
+    if (w.free_index[v] >= 0)  // M - h d(air drag)/dv
+      w.add_block(w.diagonal[w.free_index[v]], m.masses[v] * (1 + h * m.air_damping[v]) * Mat3::Identity());
+  std::vector<Vec3> stiffness_times_v(n, Vec3::Zero());  // dF/dx v
+  std::vector<Vec3> coupling(n, Vec3::Zero());           // A_(free, pinned) dv_pinned
+  for (std::size_t k = 0; k < m.springs.size(); ++k) {
+    const Spring& s = m.springs[k];
+    const SpringEvaluation e = evaluate_spring(state.positions[s.i], state.positions[s.j], state.velocities[s.i],
+                                               state.velocities[s.j], s.rest_length, s.stiffness, s.damping);
+    w.forces[s.i] += e.force;
+    w.forces[s.j] -= e.force;
+    const Vec3 kv = e.d_force_d_x * (state.velocities[s.i] - state.velocities[s.j]);
+    stiffness_times_v[s.i] += kv;
+    stiffness_times_v[s.j] -= kv;
+    const Mat3 diagonal_block = -h * e.d_force_d_v - h * h * e.d_force_d_x;  // A's (i,i) and (j,j)
+    const int a = w.free_index[s.i], b = w.free_index[s.j];
+    if (a >= 0) w.add_block(w.diagonal[a], diagonal_block);
+    if (b >= 0) w.add_block(w.diagonal[b], diagonal_block);
+    if (a >= 0 && b >= 0) {
+      w.add_block(w.spring_blocks[k].ij, -diagonal_block);
+      w.add_block(w.spring_blocks[k].ji, -diagonal_block);
+    } else if (a >= 0) {  // j prescribed: A's (i,j) block times its dv moves to the right-hand side
+      coupling[s.i] -= diagonal_block * pinned_dv[s.j];
+    } else if (b >= 0) {
+      coupling[s.j] -= diagonal_block * pinned_dv[s.i];
+    }
+  }
+  for (int v = 0; v < n; ++v) {
+    const int a = w.free_index[v];
+    if (a >= 0) w.rhs.segment<3>(3 * a) = h * (w.forces[v] + h * stiffness_times_v[v]) - coupling[v];
+  }
+
+  // The implicit solve.
+  const auto begin = std::chrono::steady_clock::now();
+  const SolveReport solved = solver_->solve(w.matrix, w.rhs, w.solution);
+  report.solve_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - begin).count();
+  report.solver_iterations = solved.iterations;
+  report.solver_converged = solved.converged;
+  if (!solved.ok) {
+    report.ok = false;
+    report.failure = "the linear solver failed: " + solved.error;
+    return report;
+  }
+
+  // Velocities and positions.
+  for (int v = 0; v < n; ++v) {
+    const int a = w.free_index[v];
+    state.velocities[v] += a >= 0 ? Vec3(w.solution.segment<3>(3 * a)) : pinned_dv[v];
+    state.positions[v] += h * state.velocities[v];
+  }
+  state.time = t_next;
+  ++state.steps;
+
+  if (m.scene.collisions.obstacles) report.obstacle_contacts = respond_to_analytic_obstacles(m, state);
+
+  // Checks: numbers and bounds.
+  for (int v = 0; v < n; ++v) {
+    if (!state.positions[v].allFinite() || !state.velocities[v].allFinite()) {
+      report.ok = false;
+      report.failure = "vertex " + std::to_string(v) + " has a NaN or infinite position or velocity";
+      return report;
+    }
+    if (!m.bounds.contains(state.positions[v])) {
+      report.ok = false;
+      report.failure = "the cloth exploded: vertex " + std::to_string(v) + " left the scene bounds";
+      return report;
+    }
+  }
+  return report;
+}
+
+Scalar kinetic_energy(const Model& model, const State& state) {
+  Scalar e = 0;
+  for (std::size_t v = 0; v < state.velocities.size(); ++v) e += 0.5 * model.masses[v] * state.velocities[v].squaredNorm();
+  return e;
+}
+
+Scalar potential_energy(const Model& model, const State& state) {
+  Scalar e = 0;
+  for (const Spring& s : model.springs) {
+    const Scalar stretch = (state.positions[s.i] - state.positions[s.j]).norm() - s.rest_length;
+    e += 0.5 * s.stiffness * stretch * stretch;
+  }
+  for (std::size_t v = 0; v < state.positions.size(); ++v) e -= model.masses[v] * model.scene.gravity.dot(state.positions[v]);
+  return e;
+}
+
+Scalar max_stretch(const Model& model, const State& state) {
+  Scalar worst = 1;
+  for (const Spring& s : model.springs)
+    if (s.kind == SpringKind::Stretch)
+      worst = std::max(worst, (state.positions[s.i] - state.positions[s.j]).norm() / s.rest_length);
+  return worst;
+}
+
+}  // namespace drape

@@ -1,0 +1,98 @@
+#include "drape/core/mesh_io.h"
+
+#include <assimp/Exporter.hpp>
+#include <assimp/Importer.hpp>
+#include <assimp/postprocess.h>
+#include <assimp/scene.h>
+
+#include <map>
+
+namespace drape {
+namespace {
+
+// assimp's format ids: drape's "obj" is the Wavefront exporter that writes no .mtl file.
+std::string assimp_format(const std::string& format) { return format == "obj" ? "objnomtl" : format; }
+
+}  // namespace
+
+TriangleMesh load_mesh(const std::filesystem::path& path) {
+  if (!std::filesystem::is_regular_file(path)) throw MeshFileError(path.string() + ": no such mesh file");
+  Assimp::Importer importer;
+  const aiScene* scene = importer.ReadFile(path.string(), aiProcess_Triangulate | aiProcess_SortByPType);
+  if (!scene || !scene->mRootNode) throw MeshFileError(path.string() + ": cannot read the mesh: " + importer.GetErrorString());
+  TriangleMesh mesh;
+  std::map<std::array<Scalar, 3>, int> welded;
+  for (unsigned m = 0; m < scene->mNumMeshes; ++m) {
+    const aiMesh* part = scene->mMeshes[m];
+    std::vector<int> index(part->mNumVertices);
+    for (unsigned v = 0; v < part->mNumVertices; ++v) {
+      const aiVector3D& p = part->mVertices[v];
+      const std::array<Scalar, 3> key{p.x, p.y, p.z};
+      const auto [it, inserted] = welded.emplace(key, int(mesh.vertices.size()));
+      if (inserted) mesh.vertices.emplace_back(p.x, p.y, p.z);
+      index[v] = it->second;
+    }
+    for (unsigned f = 0; f < part->mNumFaces; ++f) {
+      const aiFace& face = part->mFaces[f];
+      if (face.mNumIndices != 3) continue;  // points and lines
+      mesh.triangles.push_back({index[face.mIndices[0]], index[face.mIndices[1]], index[face.mIndices[2]]});
+    }
+  }
+  if (mesh.triangles.empty()) throw MeshFileError(path.string() + ": the file holds no triangles");
+  return mesh;
+}
+
+bool mesh_format_supported(const std::string& format) {
+  Assimp::Exporter exporter;
+  const std::string id = assimp_format(format);
+  for (std::size_t i = 0; i < exporter.GetExportFormatCount(); ++i)
+    if (id == exporter.GetExportFormatDescription(i)->id) return true;
+  return false;
+}
+
+std::string mesh_extension(const std::string& format) {
+  Assimp::Exporter exporter;
+  const std::string id = assimp_format(format);
+  for (std::size_t i = 0; i < exporter.GetExportFormatCount(); ++i) {
+    const aiExportFormatDesc* d = exporter.GetExportFormatDescription(i);
+    if (id == d->id) return std::string(".") + d->fileExtension;
+  }
+  return "." + format;
+}
+
+void save_mesh(const std::filesystem::path& path, const TriangleMesh& mesh, const std::string& format) {
+  aiScene scene;  // owns and frees everything attached below
+  scene.mRootNode = new aiNode();
+  scene.mMaterials = new aiMaterial*[1]{new aiMaterial()};
+  scene.mNumMaterials = 1;
+  aiMesh* out = new aiMesh();
+  scene.mMeshes = new aiMesh*[1]{out};
+  scene.mNumMeshes = 1;
+  scene.mRootNode->mMeshes = new unsigned[1]{0};
+  scene.mRootNode->mNumMeshes = 1;
+  out->mMaterialIndex = 0;
+  out->mPrimitiveTypes = aiPrimitiveType_TRIANGLE;
+  out->mNumVertices = unsigned(mesh.vertices.size());
+  out->mVertices = new aiVector3D[mesh.vertices.size()];
+  for (std::size_t i = 0; i < mesh.vertices.size(); ++i)
+    out->mVertices[i] = aiVector3D(ai_real(mesh.vertices[i].x()), ai_real(mesh.vertices[i].y()), ai_real(mesh.vertices[i].z()));
+  out->mNumFaces = unsigned(mesh.triangles.size());
+  out->mFaces = new aiFace[mesh.triangles.size()];
+  for (std::size_t f = 0; f < mesh.triangles.size(); ++f) {
+    out->mFaces[f].mNumIndices = 3;
+    out->mFaces[f].mIndices = new unsigned[3]{unsigned(mesh.triangles[f][0]), unsigned(mesh.triangles[f][1]),
+                                              unsigned(mesh.triangles[f][2])};
+  }
+  const std::filesystem::path temporary = path.string() + ".partial";
+  Assimp::Exporter exporter;
+  if (exporter.Export(&scene, assimp_format(format), temporary.string()) != AI_SUCCESS) {
+    std::error_code ignored;
+    std::filesystem::remove(temporary, ignored);
+    throw MeshFileError(path.string() + ": cannot write the mesh: " + exporter.GetErrorString());
+  }
+  std::error_code error;
+  std::filesystem::rename(temporary, path, error);
+  if (error) throw MeshFileError(path.string() + ": cannot move the finished mesh into place: " + error.message());
+}
+
+}  // namespace drape

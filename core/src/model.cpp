@@ -1,0 +1,142 @@
+#include "drape/core/model.h"
+
+#include "drape/core/mesh_io.h"
+
+namespace drape {
+namespace {
+
+[[noreturn]] void fail(const Scene& scene, const std::string& path, const std::string& what) {
+  throw SceneError(scene.file.string() + ": " + path + ": " + what);
+}
+
+TriangleMesh read_mesh(const Scene& scene, const std::filesystem::path& file, const std::string& path) {
+  TriangleMesh mesh;
+  try {
+    mesh = load_mesh(file);
+  } catch (const MeshFileError& e) {
+    fail(scene, path, e.what());
+  }
+  if (const std::string problem = mesh_problem(mesh); !problem.empty()) fail(scene, path, file.string() + ": " + problem);
+  return mesh;
+}
+
+void add_springs(Model& model, const std::vector<Edge>& edges, int offset, Scalar stiffness, Scalar damping_time,
+                 SpringKind kind) {
+  if (stiffness <= 0) return;  // a scene pays only for what it asks for
+  for (const Edge& e : edges) {
+    const int i = e[0] + offset, j = e[1] + offset;
+    const Scalar rest = (model.initial_positions[i] - model.initial_positions[j]).norm();
+    if (!(rest > 0)) continue;
+    const Scalar k = stiffness / rest;
+    model.springs.push_back({i, j, rest, k, damping_time * k, kind});
+  }
+}
+
+}  // namespace
+
+Model build_model(const Scene& scene) {
+  Model model;
+  model.scene = scene;
+  model.pin_of_vertex.clear();
+
+  for (std::size_t c = 0; c < scene.cloths.size(); ++c) {
+    const ClothSpec& spec = scene.cloths[c];
+    const std::string path = "/cloths/" + std::to_string(c);
+    std::optional<GridMesh> grid;
+    TriangleMesh mesh;
+    if (spec.grid) {
+      grid = make_grid(*spec.grid);
+      mesh = grid->mesh;
+    } else {
+      mesh = read_mesh(scene, spec.mesh_file, path + "/mesh");
+    }
+    ClothRange range;
+    range.first_vertex = int(model.initial_positions.size());
+    range.vertex_count = int(mesh.vertices.size());
+    range.first_triangle = int(model.triangles.size());
+    range.triangle_count = int(mesh.triangles.size());
+    const int offset = range.first_vertex;
+    for (const Vec3& v : mesh.vertices) model.initial_positions.push_back(spec.transform.apply(v));
+    model.masses.resize(model.initial_positions.size(), 0.0);
+    model.air_damping.resize(model.initial_positions.size(), spec.material.air_damping);
+    for (const Triangle& t : mesh.triangles) {
+      const Triangle global{t[0] + offset, t[1] + offset, t[2] + offset};
+      model.triangles.push_back(global);
+      const Vec3& a = model.initial_positions[global[0]];
+      const Scalar area = 0.5 * (model.initial_positions[global[1]] - a).cross(model.initial_positions[global[2]] - a).norm();
+      for (int k = 0; k < 3; ++k) model.masses[global[k]] += spec.material.density * area / 3;
+    }
+    const Material& m = spec.material;
+    if (grid) {
+      const GridSprings springs = grid_springs(*grid);
+      add_springs(model, springs.stretch, offset, m.stretch, m.damping, SpringKind::Stretch);
+      add_springs(model, springs.shear, offset, m.shear, m.damping, SpringKind::Shear);
+      add_springs(model, springs.bend, offset, m.bend, m.damping, SpringKind::Bend);
+    } else {
+      add_springs(model, mesh_edges(mesh), offset, m.stretch, m.damping, SpringKind::Stretch);
+      add_springs(model, bending_pairs(mesh), offset, m.bend, m.damping, SpringKind::Bend);
+    }
+    model.cloths.push_back(range);
+  }
+
+  // Handles: the pinned vertices.
+  model.pin_of_vertex.assign(model.initial_positions.size(), -1);
+  for (std::size_t h = 0; h < scene.handles.size(); ++h) {
+    const HandleSpec& handle = scene.handles[h];
+    const std::string path = "/handles/" + std::to_string(h);
+    const ClothRange& range = model.cloths[handle.cloth];
+    std::vector<int> chosen;
+    for (std::size_t k = 0; k < handle.nodes.size(); ++k) {
+      if (handle.nodes[k] >= range.vertex_count)
+        fail(scene, path + "/nodes/" + std::to_string(k),
+             "vertex " + std::to_string(handle.nodes[k]) + " does not exist: cloth " + std::to_string(handle.cloth) +
+                 " has " + std::to_string(range.vertex_count) + " vertices");
+      chosen.push_back(range.first_vertex + handle.nodes[k]);
+    }
+    if (!handle.corners.empty()) {
+      const auto& cloth = scene.cloths[handle.cloth];
+      if (!cloth.grid) fail(scene, path + "/corners", "corner names need a grid cloth; use 'nodes' or 'box' for a mesh");
+      const GridMesh grid = make_grid(*cloth.grid);
+      for (const std::string& name : handle.corners) chosen.push_back(range.first_vertex + *grid_corner(grid, name));
+    }
+    if (handle.box) {
+      std::size_t found = 0;
+      for (int v = range.first_vertex; v < range.first_vertex + range.vertex_count; ++v)
+        if (handle.box->contains(model.initial_positions[v])) chosen.push_back(v), ++found;
+      if (found == 0) fail(scene, path + "/box", "the box holds no vertex of cloth " + std::to_string(handle.cloth));
+    }
+    for (int v : chosen) {
+      if (model.pin_of_vertex[v] >= 0) continue;  // already pinned by an earlier handle
+      model.pin_of_vertex[v] = int(model.pins.size());
+      model.pins.push_back({v, int(h)});
+    }
+  }
+
+  // Obstacles.
+  for (std::size_t o = 0; o < scene.obstacles.size(); ++o) {
+    Obstacle obstacle{scene.obstacles[o], {}};
+    if (obstacle.spec.kind == ObstacleSpec::Kind::Mesh) {
+      obstacle.mesh = read_mesh(scene, obstacle.spec.mesh_file, "/obstacles/" + std::to_string(o) + "/mesh");
+      for (Vec3& v : obstacle.mesh.vertices) v = obstacle.spec.transform.apply(v);
+    }
+    model.obstacles.push_back(std::move(obstacle));
+  }
+
+  // Bounds: given, or everything at the start grown by 100 diagonals.
+  if (scene.bounds) {
+    model.bounds = *scene.bounds;
+  } else {
+    Vec3 lo = model.initial_positions[0], hi = lo;
+    const auto include = [&](const Vec3& p) { lo = lo.cwiseMin(p), hi = hi.cwiseMax(p); };
+    for (const Vec3& p : model.initial_positions) include(p);
+    for (const Obstacle& o : model.obstacles) {
+      if (o.spec.kind == ObstacleSpec::Kind::Sphere) include(o.spec.center - Vec3::Constant(o.spec.radius)), include(o.spec.center + Vec3::Constant(o.spec.radius));
+      for (const Vec3& p : o.mesh.vertices) include(p);
+    }
+    const Scalar grow = 100 * std::max<Scalar>((hi - lo).norm(), 1e-3);
+    model.bounds = Box{lo - Vec3::Constant(grow), hi + Vec3::Constant(grow)};
+  }
+  return model;
+}
+
+}  // namespace drape

@@ -1,0 +1,54 @@
+#include "drape/core/obstacle.h"
+
+#include <limits>
+
+#include "drape/ccd/distance.h"
+
+namespace drape {
+
+Vec3 body_velocity(const Motion& motion, const Vec3& x_now, Scalar t) {
+  if (t < motion.start || t >= motion.end) return Vec3::Zero();
+  const Vec3 centre_now = motion.center + motion.velocity * (t - motion.start);
+  return motion.velocity + motion.angular_velocity.cross(x_now - centre_now);
+}
+
+SurfaceContact analytic_contact(const Obstacle& obstacle, Scalar t, const Vec3& x) {
+  const ObstacleSpec& s = obstacle.spec;
+  SurfaceContact out;
+  if (s.kind == ObstacleSpec::Kind::Sphere) {
+    const Vec3 centre = s.motion.position(s.center, t);
+    const Vec3 offset = x - centre;
+    const Scalar length = offset.norm();
+    out.normal = length > 0 ? Vec3(offset / length) : Vec3::UnitZ();
+    out.signed_distance = length - s.radius;
+  } else {
+    const Vec3 point = s.motion.position(s.point, t);
+    out.normal = (s.motion.position(s.point + s.normal, t) - point).normalized();
+    out.signed_distance = out.normal.dot(x - point);
+  }
+  out.surface_velocity = body_velocity(s.motion, x - out.signed_distance * out.normal, t);
+  return out;
+}
+
+std::vector<Vec3> posed_vertices(const Obstacle& obstacle, Scalar t) {
+  std::vector<Vec3> out;
+  out.reserve(obstacle.mesh.vertices.size());
+  for (const Vec3& v : obstacle.mesh.vertices) out.push_back(obstacle.spec.motion.position(v, t));
+  return out;
+}
+
+Scalar distance_to_obstacle(const Obstacle& obstacle, Scalar t, const std::vector<Vec3>& points) {
+  Scalar best = std::numeric_limits<Scalar>::infinity();
+  if (obstacle.spec.kind != ObstacleSpec::Kind::Mesh) {
+    for (const Vec3& p : points) best = std::min(best, analytic_contact(obstacle, t, p).signed_distance);
+    return best;
+  }
+  const std::vector<Vec3> v = posed_vertices(obstacle, t);
+  for (const Vec3& p : points) {
+    for (const Triangle& tri : obstacle.mesh.triangles)
+      best = std::min(best, ccd::closest_point_triangle<Scalar>(p, v[tri[0]], v[tri[1]], v[tri[2]]).distance_squared);
+  }
+  return std::sqrt(best);
+}
+
+}  // namespace drape

@@ -1,0 +1,370 @@
+#include "drape/core/scene.h"
+
+#include <Eigen/Geometry>
+#include <cmath>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <set>
+#include <sstream>
+
+namespace drape {
+
+Vec3 Transform::apply(const Vec3& x) const {
+  const Scalar radians = rotate_degrees * M_PI / 180.0;
+  return Eigen::AngleAxis<Scalar>(radians, rotate_axis.normalized()) * (scale * x) + translate;
+}
+
+namespace {
+
+Eigen::Matrix<Scalar, 3, 3> rotation(const Vec3& angular_velocity, Scalar duration) {
+  const Scalar rate = angular_velocity.norm();
+  if (rate == 0) return Eigen::Matrix<Scalar, 3, 3>::Identity();
+  return Eigen::AngleAxis<Scalar>(rate * duration, angular_velocity / rate).toRotationMatrix();
+}
+
+}  // namespace
+
+Vec3 Motion::position(const Vec3& x, Scalar t) const {
+  const Scalar tau = std::clamp(t, start, end) - start;
+  if (!(tau > 0)) return x;
+  return center + velocity * tau + rotation(angular_velocity, tau) * (x - center);
+}
+
+Vec3 Motion::velocity_at(const Vec3& x, Scalar t) const {
+  if (t < start || t >= end) return Vec3::Zero();
+  const Scalar tau = t - start;
+  const Vec3 centre_now = center + velocity * tau;
+  return velocity + angular_velocity.cross(position(x, t) - centre_now);
+}
+
+namespace {
+
+using json = nlohmann::json;
+
+std::string describe(const json& value) {
+  std::string text = value.dump();
+  if (text.size() > 40) text = text.substr(0, 37) + "...";
+  return text;
+}
+
+// A JSON node with its path in the file, for messages that say where.
+class Node {
+ public:
+  Node(const json& value, std::string path, const std::filesystem::path& file)
+      : value_(value), path_(std::move(path)), file_(file) {}
+
+  [[noreturn]] void fail(const std::string& what) const {
+    throw SceneError(file_.string() + ": " + (path_.empty() ? "/" : path_) + ": " + what);
+  }
+  const std::string& path() const { return path_; }
+  const json& raw() const { return value_; }
+
+  // Only these keys (and "comment") may appear.
+  void allow(std::initializer_list<const char*> keys) const {
+    if (!value_.is_object()) fail("expected an object, found " + describe(value_));
+    std::set<std::string> allowed(keys.begin(), keys.end());
+    allowed.insert("comment");
+    for (const auto& [key, v] : value_.items()) {
+      if (allowed.count(key)) continue;
+      std::string list;
+      for (const auto& k : keys) list += std::string(list.empty() ? "" : ", ") + k;
+      Node(v, path_ + "/" + key, file_).fail("unknown key (expected one of: " + list + ")");
+    }
+  }
+  bool has(const char* key) const { return value_.is_object() && value_.contains(key); }
+  Node at(const char* key) const {
+    if (!has(key)) fail(std::string("missing the required key '") + key + "'");
+    return Node(value_.at(key), path_ + "/" + key, file_);
+  }
+  Node at(std::size_t index) const { return Node(value_.at(index), path_ + "/" + std::to_string(index), file_); }
+  std::size_t size() const { return value_.size(); }
+
+  std::vector<Node> array(std::size_t min_size = 0) const {
+    if (!value_.is_array()) fail("expected an array, found " + describe(value_));
+    if (value_.size() < min_size) fail("expected at least " + std::to_string(min_size) + " entries");
+    std::vector<Node> out;
+    for (std::size_t i = 0; i < value_.size(); ++i) out.push_back(at(i));
+    return out;
+  }
+  Scalar number() const {
+    if (!value_.is_number()) fail("expected a number, found " + describe(value_));
+    const Scalar x = value_.get<Scalar>();
+    if (!std::isfinite(x)) fail("expected a finite number");
+    return x;
+  }
+  Scalar number_in(Scalar lo, Scalar hi, const char* range) const {
+    const Scalar x = number();
+    if (!(x >= lo && x <= hi)) fail(std::string("expected a number ") + range + ", found " + describe(value_));
+    return x;
+  }
+  Scalar positive() const {
+    const Scalar x = number();
+    if (!(x > 0)) fail("expected a number > 0, found " + describe(value_));
+    return x;
+  }
+  Scalar non_negative() const { return number_in(0, std::numeric_limits<Scalar>::max(), ">= 0"); }
+  int integer_in(int lo, int hi) const {
+    if (!value_.is_number_integer()) fail("expected an integer, found " + describe(value_));
+    const auto x = value_.get<long long>();
+    if (x < lo || x > hi)
+      fail("expected an integer from " + std::to_string(lo) + " to " + std::to_string(hi) + ", found " + describe(value_));
+    return int(x);
+  }
+  bool boolean() const {
+    if (!value_.is_boolean()) fail("expected true or false, found " + describe(value_));
+    return value_.get<bool>();
+  }
+  std::string string() const {
+    if (!value_.is_string()) fail("expected a string, found " + describe(value_));
+    return value_.get<std::string>();
+  }
+  std::string one_of(std::initializer_list<const char*> choices) const {
+    const std::string s = string();
+    std::string list;
+    for (const auto& c : choices) {
+      if (s == c) return s;
+      list += std::string(list.empty() ? "" : ", ") + "'" + c + "'";
+    }
+    fail("expected one of " + list + ", found '" + s + "'");
+  }
+  Vec3 vec3() const {
+    if (!value_.is_array() || value_.size() != 3) fail("expected an array of 3 numbers, found " + describe(value_));
+    return Vec3(at(std::size_t(0)).number(), at(1).number(), at(2).number());
+  }
+  Vec2 vec2() const {
+    if (!value_.is_array() || value_.size() != 2) fail("expected an array of 2 numbers, found " + describe(value_));
+    return Vec2(at(std::size_t(0)).number(), at(1).number());
+  }
+  std::filesystem::path file_path() const {
+    const std::filesystem::path p = string();
+    return p.is_absolute() ? p : file_.parent_path() / p;
+  }
+
+ private:
+  const json& value_;
+  std::string path_;
+  const std::filesystem::path& file_;
+};
+
+Transform read_transform(const Node& n) {
+  n.allow({"translate", "rotate", "scale"});
+  Transform t;
+  if (n.has("translate")) t.translate = n.at("translate").vec3();
+  if (n.has("rotate")) {
+    const Node r = n.at("rotate");
+    if (!r.raw().is_array() || r.size() != 4) r.fail("expected [degrees, axis x, axis y, axis z]");
+    t.rotate_degrees = r.at(std::size_t(0)).number();
+    t.rotate_axis = Vec3(r.at(1).number(), r.at(2).number(), r.at(3).number());
+    if (!(t.rotate_axis.norm() > 0)) r.fail("the rotation axis must not be zero");
+  }
+  if (n.has("scale")) t.scale = n.at("scale").positive();
+  return t;
+}
+
+Motion read_motion(const Node& n) {
+  n.allow({"velocity", "angular_velocity", "center", "start", "end"});
+  Motion m;
+  if (n.has("velocity")) m.velocity = n.at("velocity").vec3();
+  if (n.has("angular_velocity")) m.angular_velocity = n.at("angular_velocity").vec3();
+  if (n.has("center")) m.center = n.at("center").vec3();
+  if (n.has("start")) m.start = n.at("start").non_negative();
+  if (n.has("end")) m.end = n.at("end").non_negative();
+  if (!(m.end > m.start)) n.fail("'end' must be later than 'start'");
+  return m;
+}
+
+Box read_box(const Node& n) {
+  n.allow({"min", "max"});
+  Box b{n.at("min").vec3(), n.at("max").vec3()};
+  if (!(b.min.array() <= b.max.array()).all()) n.fail("expected min <= max in every coordinate");
+  return b;
+}
+
+ClothSpec read_cloth(const Node& n) {
+  n.allow({"mesh", "grid", "transform", "material"});
+  ClothSpec c;
+  if (n.has("grid") == n.has("mesh")) n.fail("expected exactly one of 'grid' (the built-in generator) or 'mesh' (a file)");
+  if (n.has("grid")) {
+    const Node g = n.at("grid");
+    g.allow({"size", "resolution", "diagonals"});
+    GridSpec spec;
+    if (g.has("size")) {
+      spec.size = g.at("size").vec2();
+      if (!(spec.size.minCoeff() > 0)) g.at("size").fail("expected two sizes > 0");
+    }
+    if (g.has("resolution")) {
+      const Node r = g.at("resolution");
+      if (!r.raw().is_array() || r.size() != 2) r.fail("expected [quads along x, quads along y]");
+      spec.resolution = {r.at(std::size_t(0)).integer_in(1, 4096), r.at(1).integer_in(1, 4096)};
+    }
+    if (g.has("diagonals")) {
+      const std::string d = g.at("diagonals").one_of({"alternate", "forward", "backward"});
+      spec.diagonals = d == "forward" ? GridDiagonals::Forward : d == "backward" ? GridDiagonals::Backward : GridDiagonals::Alternate;
+    }
+    c.grid = spec;
+  } else {
+    c.mesh_file = n.at("mesh").file_path();
+  }
+  if (n.has("transform")) c.transform = read_transform(n.at("transform"));
+  if (n.has("material")) {
+    const Node m = n.at("material");
+    m.allow({"density", "stretch", "shear", "bend", "damping", "air_damping"});
+    if (m.has("density")) c.material.density = m.at("density").positive();
+    if (m.has("stretch")) c.material.stretch = m.at("stretch").non_negative();
+    if (m.has("shear")) c.material.shear = m.at("shear").non_negative();
+    if (m.has("bend")) c.material.bend = m.at("bend").non_negative();
+    if (m.has("damping")) c.material.damping = m.at("damping").non_negative();
+    if (m.has("air_damping")) c.material.air_damping = m.at("air_damping").non_negative();
+  }
+  return c;
+}
+
+HandleSpec read_handle(const Node& n, std::size_t cloth_count) {
+  n.allow({"cloth", "nodes", "corners", "box", "motion"});
+  HandleSpec h;
+  if (n.has("cloth")) h.cloth = n.at("cloth").integer_in(0, int(cloth_count) - 1);
+  if (n.has("nodes"))
+    for (const Node& i : n.at("nodes").array(1)) h.nodes.push_back(i.integer_in(0, std::numeric_limits<int>::max()));
+  if (n.has("corners"))
+    for (const Node& c : n.at("corners").array(1))
+      h.corners.push_back(c.one_of({"bottom-left", "bottom-right", "top-left", "top-right"}));
+  if (n.has("box")) h.box = read_box(n.at("box"));
+  if (h.nodes.empty() && h.corners.empty() && !h.box) n.fail("expected 'nodes', 'corners' or 'box' to choose the pinned vertices");
+  if (n.has("motion")) h.motion = read_motion(n.at("motion"));
+  return h;
+}
+
+ObstacleSpec read_obstacle(const Node& n) {
+  n.allow({"sphere", "plane", "mesh", "transform", "motion"});
+  ObstacleSpec o;
+  const int kinds = n.has("sphere") + n.has("plane") + n.has("mesh");
+  if (kinds != 1) n.fail("expected exactly one of 'sphere', 'plane' or 'mesh'");
+  if (n.has("sphere")) {
+    const Node s = n.at("sphere");
+    s.allow({"center", "radius"});
+    o.kind = ObstacleSpec::Kind::Sphere;
+    o.center = s.at("center").vec3();
+    o.radius = s.at("radius").positive();
+  } else if (n.has("plane")) {
+    const Node p = n.at("plane");
+    p.allow({"point", "normal"});
+    o.kind = ObstacleSpec::Kind::Plane;
+    if (p.has("point")) o.point = p.at("point").vec3();
+    if (p.has("normal")) o.normal = p.at("normal").vec3();
+    if (!(o.normal.norm() > 0)) p.at("normal").fail("the normal must not be zero");
+    o.normal.normalize();
+  } else {
+    o.kind = ObstacleSpec::Kind::Mesh;
+    o.mesh_file = n.at("mesh").file_path();
+  }
+  if (n.has("transform")) {
+    if (o.kind != ObstacleSpec::Kind::Mesh) n.at("transform").fail("only a mesh obstacle takes a transform");
+    o.transform = read_transform(n.at("transform"));
+  }
+  if (n.has("motion")) o.motion = read_motion(n.at("motion"));
+  return o;
+}
+
+// Line and column of a byte offset, for JSON syntax errors.
+std::string line_and_column(const std::string& text, std::size_t byte) {
+  std::size_t line = 1, column = 1;
+  for (std::size_t i = 0; i < std::min(byte, text.size()); ++i) {
+    if (text[i] == '\n') ++line, column = 1;
+    else ++column;
+  }
+  return "line " + std::to_string(line) + ", column " + std::to_string(column > 1 ? column - 1 : 1);
+}
+
+}  // namespace
+
+Scene parse_scene(const std::string& text, const std::filesystem::path& file) {
+  json root;
+  try {
+    root = json::parse(text);
+  } catch (const json::parse_error& e) {
+    std::string reason = e.what();
+    if (const auto p = reason.find("syntax error"); p != std::string::npos) reason = reason.substr(p);
+    throw SceneError(file.string() + ": " + line_and_column(text, e.byte) + ": invalid JSON: " + reason);
+  } catch (const json::exception& e) {  // e.g. a number too large for a double
+    std::string reason = e.what();
+    if (const auto p = reason.find("] "); p != std::string::npos) reason = reason.substr(p + 2);
+    throw SceneError(file.string() + ": invalid JSON: " + reason);
+  }
+  const Node n(root, "", file);
+  n.allow({"frame_time", "frame_steps", "timestep", "end_time", "frames", "gravity", "cloths", "handles",
+           "obstacles", "wind", "friction", "solver", "collisions", "output", "bounds", "render"});
+  Scene s;
+  s.file = file;
+  if (n.has("comment")) s.comment = n.at("comment").string();
+  if (n.has("frame_time")) s.frame_time = n.at("frame_time").positive();
+  if (n.has("frame_steps") && n.has("timestep")) n.fail("give 'frame_steps' or 'timestep', not both");
+  if (n.has("frame_steps")) s.frame_steps = n.at("frame_steps").integer_in(1, 100000);
+  if (n.has("timestep")) {
+    const Node t = n.at("timestep");
+    const Scalar h = t.positive();
+    const Scalar steps = s.frame_time / h;
+    if (std::abs(steps - std::round(steps)) > 1e-6 * steps || std::round(steps) < 1)
+      t.fail("expected a timestep that divides frame_time (" + std::to_string(s.frame_time) + ") evenly");
+    s.frame_steps = int(std::round(steps));
+  }
+  if (n.has("frames") && n.has("end_time")) n.fail("give 'frames' or 'end_time', not both");
+  if (n.has("frames")) s.frames = n.at("frames").integer_in(1, 10000000);
+  if (n.has("end_time")) s.frames = std::max(1, int(std::ceil(n.at("end_time").positive() / s.frame_time - 1e-9)));
+  if (n.has("gravity")) s.gravity = n.at("gravity").vec3();
+  for (const Node& c : n.at("cloths").array(1)) s.cloths.push_back(read_cloth(c));
+  if (n.has("handles"))
+    for (const Node& h : n.at("handles").array()) s.handles.push_back(read_handle(h, s.cloths.size()));
+  if (n.has("obstacles"))
+    for (const Node& o : n.at("obstacles").array()) s.obstacles.push_back(read_obstacle(o));
+  if (n.has("wind")) {
+    const Node w = n.at("wind");
+    w.allow({"velocity", "density", "drag"});
+    WindSpec wind;
+    if (w.has("velocity")) wind.velocity = w.at("velocity").vec3();
+    if (w.has("density")) wind.density = w.at("density").non_negative();
+    if (w.has("drag")) wind.drag = w.at("drag").non_negative();
+    s.wind = wind;
+  }
+  if (n.has("friction")) s.friction = n.at("friction").non_negative();
+  if (n.has("solver")) {
+    const Node v = n.at("solver");
+    v.allow({"type", "tolerance", "max_iterations"});
+    if (v.has("type")) s.solver.kind = v.at("type").one_of({"cholmod", "cg"}) == "cg" ? SolverKind::ConjugateGradient : SolverKind::Cholmod;
+    if (v.has("tolerance")) s.solver.tolerance = v.at("tolerance").number_in(1e-16, 1, "from 1e-16 to 1");
+    if (v.has("max_iterations")) s.solver.max_iterations = v.at("max_iterations").integer_in(1, 100000000);
+  }
+  if (n.has("collisions")) {
+    const Node c = n.at("collisions");
+    c.allow({"self", "obstacles", "thickness", "method"});
+    if (c.has("self")) s.collisions.self = c.at("self").boolean();
+    if (c.has("obstacles")) s.collisions.obstacles = c.at("obstacles").boolean();
+    if (c.has("thickness")) s.collisions.thickness = c.at("thickness").non_negative();
+    if (c.has("method"))
+      s.collisions.method = *ccd::parse_method(c.at("method").one_of({"cubic", "dnf", "vincent", "conservative"}));
+  }
+  if (n.has("output")) {
+    const Node o = n.at("output");
+    o.allow({"folder", "mesh_format", "meshes"});
+    if (o.has("folder")) s.output.folder = o.at("folder").string();
+    if (o.has("mesh_format")) s.output.mesh_format = o.at("mesh_format").one_of({"obj", "ply", "plyb", "stl", "stlb", "gltf2", "glb2", "collada"});
+    if (o.has("meshes")) s.output.meshes = o.at("meshes").boolean();
+  }
+  if (s.output.folder.empty()) s.output.folder = std::filesystem::path("out") / file.stem();
+  if (n.has("bounds")) s.bounds = read_box(n.at("bounds"));
+  if (n.has("render")) {
+    const Node r = n.at("render");
+    if (!r.raw().is_object()) r.fail("expected an object");
+    s.render_json = r.raw().dump();
+  }
+  return s;
+}
+
+Scene load_scene(const std::filesystem::path& path) {
+  std::ifstream in(path);
+  if (!in) throw SceneError(path.string() + ": cannot open the scene file");
+  std::stringstream text;
+  text << in.rdbuf();
+  return parse_scene(text.str(), path);
+}
+
+}  // namespace drape

@@ -1,0 +1,186 @@
+// drape run, validate and check-stats end to end: output files, stopping and interrupting
+// without losing frames, determinism, and the golden-statistics regression of every scene.
+#include <gtest/gtest.h>
+
+#include <chrono>
+#include <csignal>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <thread>
+#include <vector>
+
+#include "drape_process.h"
+
+using drape::testing::run_drape;
+using drape::testing::Outcome;
+namespace fs = std::filesystem;
+
+namespace {
+
+const std::string SOURCE = DRAPE_SOURCE_DIR;
+
+fs::path temp_dir(const std::string& name) {
+  const fs::path dir = fs::temp_directory_path() / ("drape_run_test_" + std::to_string(::getpid())) / name;
+  fs::remove_all(dir);
+  fs::create_directories(dir.parent_path());
+  return dir;
+}
+
+std::vector<std::string> lines(const fs::path& path) {
+  std::ifstream in(path);
+  std::vector<std::string> out;
+  for (std::string line; std::getline(in, line);) out.push_back(line);
+  return out;
+}
+
+fs::path write_scene(const std::string& name, const std::string& text) {
+  const fs::path path = temp_dir(name + ".json");
+  std::ofstream(path) << text;
+  return path;
+}
+
+std::size_t count_fields(const std::string& line) { return std::count(line.begin(), line.end(), ',') + 1; }
+
+// stats.csv without the timing columns, for bit-for-bit comparison.
+std::vector<std::string> without_timings(const fs::path& stats) {
+  std::vector<std::string> out;
+  for (const std::string& line : lines(stats)) {
+    std::stringstream in(line);
+    std::string cell, kept;
+    for (int column = 0; std::getline(in, cell, ','); ++column)
+      if (column != 2 && column != 3) kept += cell + ",";
+    out.push_back(kept);
+  }
+  return out;
+}
+
+}  // namespace
+
+TEST(RunCommand, WritesFramesStatisticsAndTheScene) {
+  const fs::path out = temp_dir("hanging");
+  const Outcome run = run_drape("run " + SOURCE + "/scenes/hanging.json --frames 3 --quiet --out " + out.string());
+  ASSERT_EQ(run.status, 0) << run.output;
+  for (int frame = 0; frame <= 3; ++frame)
+    EXPECT_TRUE(fs::exists(out / ("frame_0000" + std::to_string(frame) + ".obj"))) << frame;
+  EXPECT_TRUE(fs::exists(out / "scene.json"));
+  const auto stats = lines(out / "stats.csv");
+  ASSERT_EQ(stats.size(), 5u);
+  for (const char* column : {"frame", "sim_time", "wall_ms", "solve_ms", "solver_iterations", "kinetic_energy",
+                             "potential_energy", "max_stretch", "min_distance_obstacle"})
+    EXPECT_NE(stats[0].find(column), std::string::npos) << column;
+  EXPECT_EQ(stats[4].substr(0, 2), "3,");
+}
+
+TEST(RunCommand, ValidateAcceptsAndRejects) {
+  const Outcome good = run_drape("validate " + SOURCE + "/scenes/flag.json");
+  EXPECT_EQ(good.status, 0) << good.output;
+  EXPECT_NE(good.output.find("valid"), std::string::npos);
+  const fs::path bad = write_scene("bad", R"({"cloths": [{"grid": {"resolution": [0, 3]}}]})");
+  const Outcome rejected = run_drape("validate " + bad.string());
+  EXPECT_EQ(rejected.status, 2);
+  EXPECT_NE(rejected.output.find(bad.string() + ": /cloths/0/grid/resolution/0: expected an integer from 1"),
+            std::string::npos)
+      << rejected.output;
+  EXPECT_EQ(run_drape("run " + bad.string()).status, 2);
+  EXPECT_EQ(run_drape("run /nonexistent.json").status, 2);
+  EXPECT_EQ(run_drape("run " + SOURCE + "/scenes/flag.json --frames 0").status, 2);
+}
+
+TEST(RunCommand, AStoppedRunSaysWhyAndKeepsItsFrames) {
+  // The cloth falls out of the scene bounds during its fourth frame or so.
+  const fs::path scene = write_scene("falls", R"({"comment": "falls out of its bounds",
+    "frame_time": 0.04, "frame_steps": 2, "frames": 50,
+    "cloths": [{"grid": {"resolution": [4, 4]}, "transform": {"translate": [0, 0, 1]}}],
+    "bounds": {"min": [-1, -1, 0.95], "max": [1, 1, 2]}})");
+  const fs::path out = temp_dir("falls_out");
+  const Outcome run = run_drape("run " + scene.string() + " --quiet --out " + out.string());
+  EXPECT_EQ(run.status, 3) << run.output;
+  EXPECT_NE(run.output.find("the cloth exploded"), std::string::npos) << run.output;
+  const auto stats = lines(out / "stats.csv");
+  ASSERT_GE(stats.size(), 3u);
+  const int last_frame = std::stoi(stats.back().substr(0, stats.back().find(',')));
+  EXPECT_NE(run.output.find("frame " + std::to_string(last_frame + 1)), std::string::npos) << run.output;
+  for (int frame = 0; frame <= last_frame; ++frame) {
+    char name[32];
+    std::snprintf(name, sizeof name, "frame_%05d.obj", frame);
+    EXPECT_TRUE(fs::exists(out / name)) << name;
+  }
+  for (const auto& line : stats) EXPECT_EQ(count_fields(line), count_fields(stats[0]));
+}
+
+TEST(RunCommand, InterruptKeepsEveryFinishedFrame) {
+  const fs::path out = temp_dir("interrupted");
+  const pid_t child = fork();
+  if (child == 0) {
+    const std::string scene = SOURCE + "/scenes/drape_sphere.json";
+    execl(DRAPE_EXECUTABLE, DRAPE_EXECUTABLE, "run", scene.c_str(), "--quiet", "--out", out.c_str(), nullptr);
+    _exit(127);
+  }
+  // Wait for two finished frames, then press Ctrl-C.
+  const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(60);
+  while (lines(out / "stats.csv").size() < 3 && std::chrono::steady_clock::now() < deadline)
+    std::this_thread::sleep_for(std::chrono::milliseconds(50));
+  kill(child, SIGINT);
+  int status = 0;
+  waitpid(child, &status, 0);
+  ASSERT_TRUE(WIFEXITED(status));
+  EXPECT_EQ(WEXITSTATUS(status), 3);
+  const auto stats = lines(out / "stats.csv");
+  ASSERT_GE(stats.size(), 3u);
+  for (const auto& line : stats) EXPECT_EQ(count_fields(line), count_fields(stats[0]));
+  const int last_frame = std::stoi(stats.back().substr(0, stats.back().find(',')));
+  for (int frame = 0; frame <= last_frame; ++frame) {
+    char name[32];
+    std::snprintf(name, sizeof name, "frame_%05d.obj", frame);
+    EXPECT_TRUE(fs::exists(out / name)) << name;
+  }
+  for (const auto& entry : fs::directory_iterator(out)) EXPECT_NE(entry.path().extension(), ".partial") << entry.path();
+}
+
+TEST(RunCommand, DeterministicBitForBit) {
+  const fs::path a = temp_dir("same_a"), b = temp_dir("same_b");
+  ASSERT_EQ(run_drape("run " + SOURCE + "/scenes/flag.json --frames 4 --quiet --out " + a.string()).status, 0);
+  ASSERT_EQ(run_drape("run " + SOURCE + "/scenes/flag.json --frames 4 --quiet --out " + b.string()).status, 0);
+  EXPECT_EQ(without_timings(a / "stats.csv"), without_timings(b / "stats.csv"));
+}
+
+TEST(CheckStats, GoldenStatisticsOfEveryShippedScene) {
+  // tests/golden/<scene>.csv holds the first frames of each shipped scene, written by
+  // tools/update-golden.sh (and only by it); the frame count is read from the golden file.
+  std::size_t checked = 0;
+  for (const auto& entry : fs::directory_iterator(SOURCE + "/scenes")) {
+    if (entry.path().extension() != ".json") continue;
+    const fs::path golden = SOURCE + "/tests/golden/" + entry.path().stem().string() + ".csv";
+    ASSERT_TRUE(fs::exists(golden)) << "no golden statistics for " << entry.path() << ": run tools/update-golden.sh";
+    const int frames = int(lines(golden).size()) - 2;
+    const fs::path out = temp_dir("golden_" + entry.path().stem().string());
+    const Outcome run = run_drape("run " + entry.path().string() + " --quiet --frames " + std::to_string(frames) + " --out " + out.string());
+    ASSERT_EQ(run.status, 0) << run.output;
+    const Outcome check = run_drape("check-stats " + out.string() + " " + golden.string());
+    EXPECT_EQ(check.status, 0) << entry.path() << ": " << check.output;
+    ++checked;
+  }
+  EXPECT_GE(checked, 3u);
+}
+
+TEST(CheckStats, ReportsADifferenceWithStatusOne) {
+  const fs::path golden = SOURCE + "/tests/golden/hanging.csv";
+  auto rows = lines(golden);
+  ASSERT_GE(rows.size(), 3u);
+  // Change one kinetic energy (column 6) well beyond its tolerance.
+  std::stringstream in(rows[2]);
+  std::vector<std::string> cells;
+  for (std::string cell; std::getline(in, cell, ',');) cells.push_back(cell);
+  cells[5] = std::to_string(std::stod(cells[5]) * 1.1 + 1);
+  std::string changed;
+  for (std::size_t i = 0; i < cells.size(); ++i) changed += (i ? "," : "") + cells[i];
+  rows[2] = changed + (rows[2].back() == ',' ? "," : "");
+  const fs::path edited = temp_dir("edited.csv");
+  std::ofstream file(edited);
+  for (const auto& row : rows) file << row << "\n";
+  file.close();
+  const Outcome check = run_drape("check-stats " + edited.string() + " " + golden.string());
+  EXPECT_EQ(check.status, 1);
+  EXPECT_NE(check.output.find("frame 1, column kinetic_energy"), std::string::npos) << check.output;
+}

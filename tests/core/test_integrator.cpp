@@ -1,0 +1,118 @@
+// The implicit step: a hanging cloth settles, energy never grows without input, the two
+// solvers agree, handles follow their motion, analytic obstacles are never entered.
+#include <gtest/gtest.h>
+
+#include "drape/core/integrator.h"
+#include "drape/core/obstacle.h"
+
+using namespace drape;
+
+namespace {
+
+Model model_of(const std::string& json) { return build_model(parse_scene(json, "inline.json")); }
+
+const char* HANGING = R"({"frame_time": 0.04, "frame_steps": 4,
+  "cloths": [{"grid": {"size": [1, 1], "resolution": [10, 10]}, "material": {"damping": 0.01, "air_damping": 1.0}}],
+  "handles": [{"corners": ["top-left", "top-right"]}]})";
+
+Scalar total_energy(const Model& m, const State& s) { return kinetic_energy(m, s) + potential_energy(m, s); }
+
+}  // namespace
+
+TEST(Integrator, HangingClothSettles) {
+  const Model model = model_of(HANGING);
+  State state = initial_state(model);
+  Integrator integrator(model, make_linear_solver(model.scene.solver));
+  Scalar peak = 0;
+  for (int step = 0; step < 1000; ++step) {  // 10 seconds
+    ASSERT_TRUE(integrator.step(state).ok);
+    peak = std::max(peak, kinetic_energy(model, state));
+  }
+  EXPECT_GT(peak, 1e-3);                                // it swung
+  EXPECT_LT(kinetic_energy(model, state), 1e-6 * peak);  // and came to rest
+  EXPECT_LT(max_stretch(model, state), 1.05);           // held by its springs, not torn
+  // At rest it hangs below its pins.
+  for (const Vec3& x : state.positions) EXPECT_LE(x.z(), 1e-9);
+}
+
+TEST(Integrator, EnergyNeverGrowsWithoutInput) {
+  // Static pins, gravity only: backward Euler dissipates, so kinetic plus potential energy
+  // must not increase from one step to the next.
+  const Model model = model_of(HANGING);
+  State state = initial_state(model);
+  Integrator integrator(model, make_linear_solver(model.scene.solver));
+  Scalar previous = total_energy(model, state);
+  for (int step = 0; step < 200; ++step) {
+    ASSERT_TRUE(integrator.step(state).ok);
+    const Scalar now = total_energy(model, state);
+    EXPECT_LE(now, previous + 1e-9 * std::abs(previous)) << "step " << step;
+    previous = now;
+  }
+}
+
+TEST(Integrator, CholmodAndConjugateGradientAgree) {
+  const std::string base = R"({"frame_time": 0.04, "frame_steps": 4, "cloths": [{"grid": {"resolution": [8, 8]}}],
+    "handles": [{"corners": ["top-left"]}], "solver": {"type": ")";
+  const Model direct = model_of(base + R"(cholmod"}})");
+  const Model iterative = model_of(base + R"(cg", "tolerance": 1e-12, "max_iterations": 100000}})");
+  State a = initial_state(direct), b = initial_state(iterative);
+  Integrator ia(direct, make_linear_solver(direct.scene.solver));
+  Integrator ib(iterative, make_linear_solver(iterative.scene.solver));
+  int iterations = 0;
+  for (int step = 0; step < 50; ++step) {
+    ASSERT_TRUE(ia.step(a).ok);
+    const StepReport r = ib.step(b);
+    ASSERT_TRUE(r.ok);
+    EXPECT_TRUE(r.solver_converged);
+    iterations += r.solver_iterations;
+  }
+  EXPECT_GT(iterations, 50 * 10);  // it did iterate
+  Scalar worst = 0;
+  for (std::size_t v = 0; v < a.positions.size(); ++v) worst = std::max(worst, (a.positions[v] - b.positions[v]).norm());
+  EXPECT_LT(worst, 1e-6);
+  EXPECT_EQ(ia.solver().analyses(), 1);  // the symbolic factorisation was reused
+}
+
+TEST(Integrator, HandlesFollowTheirMotionExactly) {
+  const Model model = model_of(R"({"frame_time": 0.04, "frame_steps": 4, "cloths": [{"grid": {"resolution": [6, 6]}}],
+    "handles": [{"corners": ["top-left", "top-right"], "motion": {"velocity": [0, 0, 0.5], "angular_velocity": [0, 0, 1]}}]})");
+  State state = initial_state(model);
+  Integrator integrator(model, make_linear_solver(model.scene.solver));
+  for (int step = 0; step < 40; ++step) ASSERT_TRUE(integrator.step(state).ok);
+  for (const Pin& pin : model.pins) {
+    const Vec3 expected = model.scene.handles[pin.handle].motion.position(model.initial_positions[pin.vertex], state.time);
+    EXPECT_LT((state.positions[pin.vertex] - expected).norm(), 1e-12);
+  }
+}
+
+TEST(Integrator, ClothStaysOutsideAnalyticObstacles) {
+  const Model model = model_of(R"({"frame_time": 0.04, "frame_steps": 4,
+    "cloths": [{"grid": {"size": [1, 1], "resolution": [12, 12]}, "transform": {"translate": [0, 0, 0.8]}}],
+    "obstacles": [{"sphere": {"center": [0, 0, 0.3], "radius": 0.3}}, {"plane": {}}],
+    "collisions": {"thickness": 0.01}})");
+  State state = initial_state(model);
+  Integrator integrator(model, make_linear_solver(model.scene.solver));
+  int contacts = 0;
+  for (int step = 0; step < 100; ++step) {
+    const StepReport r = integrator.step(state);
+    ASSERT_TRUE(r.ok);
+    contacts += r.obstacle_contacts;
+    for (const Obstacle& o : model.obstacles)
+      EXPECT_GE(distance_to_obstacle(o, state.time, state.positions), 0.01 - 1e-12) << "step " << step;
+  }
+  EXPECT_GT(contacts, 0);
+}
+
+TEST(Integrator, MovingSphereCarriesTheClothWithFriction) {
+  // A sphere rising under a cloth lifts it; with friction the cloth resting on top moves with it.
+  const Model model = model_of(R"({"frame_time": 0.04, "frame_steps": 4, "gravity": [0, 0, -9.81],
+    "cloths": [{"grid": {"size": [0.5, 0.5], "resolution": [6, 6]}, "transform": {"translate": [0, 0, 0.31]}}],
+    "obstacles": [{"sphere": {"center": [0, 0, 0], "radius": 0.3}, "motion": {"velocity": [0, 0, 1]}}],
+    "collisions": {"thickness": 0.01}, "friction": 1.0})");
+  State state = initial_state(model);
+  Integrator integrator(model, make_linear_solver(model.scene.solver));
+  for (int step = 0; step < 50; ++step) ASSERT_TRUE(integrator.step(state).ok);
+  // After 0.5 s the sphere's top is at 0.8; the cloth's centre vertex rides on it.
+  const int centre = 3 * 7 + 3;
+  EXPECT_NEAR(state.positions[centre].z(), 0.8 + 0.01, 0.02);
+}

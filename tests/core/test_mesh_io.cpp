@@ -1,0 +1,51 @@
+// Mesh files through assimp: round trips, welding, atomic writes, errors.
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <fstream>
+
+#include "drape/core/grid.h"
+#include "drape/core/mesh_io.h"
+
+using namespace drape;
+namespace fs = std::filesystem;
+
+TEST(MeshIo, RoundTripsObjAndPly) {
+  const fs::path dir = fs::temp_directory_path() / ("drape_mesh_io_" + std::to_string(::getpid()));
+  fs::create_directories(dir);
+  const GridMesh grid = make_grid({Vec2(2, 1), {6, 3}, GridDiagonals::Alternate});
+  for (const std::string format : {"obj", "ply", "stl"}) {
+    const fs::path path = dir / ("grid" + mesh_extension(format));
+    save_mesh(path, grid.mesh, format);
+    EXPECT_FALSE(fs::exists(path.string() + ".partial"));
+    const TriangleMesh back = load_mesh(path);
+    EXPECT_EQ(back.vertices.size(), grid.mesh.vertices.size()) << format;  // STL repeats vertices: welded
+    EXPECT_EQ(back.triangles.size(), grid.mesh.triangles.size()) << format;
+    EXPECT_NEAR(surface_area(back), 2.0, 1e-5) << format;
+    EXPECT_EQ(mesh_problem(back), "") << format;
+  }
+  EXPECT_FALSE(fs::exists(dir / "grid.mtl"));  // OBJ without a material file
+}
+
+TEST(MeshIo, ErrorsNameTheFile) {
+  try {
+    load_mesh("/nonexistent/cloth.obj");
+    FAIL();
+  } catch (const MeshFileError& e) {
+    EXPECT_NE(std::string(e.what()).find("/nonexistent/cloth.obj: no such mesh file"), std::string::npos);
+  }
+  EXPECT_THROW(save_mesh("/nonexistent/folder/x.obj", make_grid({}).mesh, "obj"), MeshFileError);
+}
+
+TEST(Mesh, TopologyOfAGrid) {
+  const GridMesh grid = make_grid({Vec2(1, 1), {3, 2}, GridDiagonals::Forward});
+  EXPECT_EQ(grid.mesh.vertices.size(), 12u);
+  EXPECT_EQ(grid.mesh.triangles.size(), 12u);
+  EXPECT_EQ(mesh_edges(grid.mesh).size(), 3u * 3 + 4 * 2 + 6);  // horizontal, vertical, diagonal
+  EXPECT_EQ(bending_pairs(grid.mesh).size(), mesh_edges(grid.mesh).size() - 10);  // interior edges
+  EXPECT_EQ(*grid_corner(grid, "top-right"), 11);
+  const GridSprings springs = grid_springs(grid);
+  EXPECT_EQ(springs.stretch.size(), 17u);
+  EXPECT_EQ(springs.shear.size(), 12u);
+  EXPECT_EQ(springs.bend.size(), 2u * 3 + 4);  // along x: 2 in each of 3 rows; along y: 1 in each of 4 columns
+}

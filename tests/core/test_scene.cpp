@@ -1,0 +1,134 @@
+// Scene files: defaults, the ARCSim vocabulary, and an error naming the file and JSON path for
+// every kind of bad input.
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <fstream>
+
+#include "drape/core/model.h"
+#include "drape/core/scene.h"
+
+using namespace drape;
+namespace fs = std::filesystem;
+
+namespace {
+
+const char* MINIMAL = R"({"cloths": [{"grid": {}}]})";
+
+std::string error_of(const std::string& text) {
+  try {
+    build_model(parse_scene(text, "bad.json"));
+  } catch (const SceneError& e) {
+    return e.what();
+  }
+  return "";
+}
+
+fs::path temp_dir() {
+  const fs::path dir = fs::temp_directory_path() / ("drape_scene_test_" + std::to_string(::getpid()));
+  fs::create_directories(dir);
+  return dir;
+}
+
+}  // namespace
+
+TEST(Scene, DefaultsAndDerivedValues) {
+  const Scene s = parse_scene(MINIMAL, "scenes/minimal.json");
+  EXPECT_EQ(s.frames, 60);
+  EXPECT_EQ(s.frame_steps, 10);
+  EXPECT_NEAR(s.timestep(), 1.0 / 300, 1e-15);
+  EXPECT_EQ(s.output.folder, fs::path("out/minimal"));
+  EXPECT_EQ(s.collisions.method, ccd::Method::Vincent);
+  const Scene t = parse_scene(R"({"frame_time": 0.04, "timestep": 0.005, "end_time": 1.0, "cloths": [{"grid": {}}]})", "t.json");
+  EXPECT_EQ(t.frame_steps, 8);
+  EXPECT_EQ(t.frames, 25);
+}
+
+TEST(Scene, EveryShippedSceneIsValid) {
+  for (const auto& entry : fs::directory_iterator(DRAPE_SOURCE_DIR "/scenes")) {
+    if (entry.path().extension() != ".json") continue;
+    const Scene s = load_scene(entry.path());
+    EXPECT_FALSE(s.comment.empty()) << entry.path() << " needs a comment saying what it shows";
+    EXPECT_NO_THROW(build_model(s)) << entry.path();
+  }
+}
+
+TEST(Scene, ZeroStiffnessCreatesNoSprings) {
+  const Model all = build_model(parse_scene(R"({"cloths": [{"grid": {"resolution": [4, 4]}}]})", "a.json"));
+  const Model no_bend = build_model(
+      parse_scene(R"({"cloths": [{"grid": {"resolution": [4, 4]}, "material": {"bend": 0, "shear": 0}}]})", "b.json"));
+  // 4x4 quads, 5x5 vertices: 40 stretch, 32 shear, 30 bend springs.
+  EXPECT_EQ(all.springs.size(), 102u);
+  EXPECT_EQ(no_bend.springs.size(), 40u);
+  for (const Spring& s : no_bend.springs) EXPECT_EQ(s.kind, SpringKind::Stretch);
+}
+
+TEST(Scene, HandlesByCornerNodeAndBox) {
+  const Model m = build_model(parse_scene(R"({"cloths": [{"grid": {"resolution": [4, 4]}}],
+    "handles": [{"corners": ["top-left", "top-right"]}, {"nodes": [12]}, {"box": {"min": [-1, -1, -1], "max": [-0.4, -0.4, 1]}}]})",
+                                          "h.json"));
+  EXPECT_EQ(m.pins.size(), 4u);  // two corners, the centre, the bottom-left corner
+  EXPECT_GE(m.pin_of_vertex[12], 0);
+}
+
+TEST(Scene, BadInputNamesTheFileThePathAndWhatWasExpected) {
+  struct Case {
+    const char* text;
+    const char* expected;
+  };
+  const Case cases[] = {
+      {R"({"cloths": [{"grid": {}}], "colisions": {}})", "bad.json: /colisions: unknown key"},
+      {R"({"cloths": [{"grid": {}}], "frames": "ten"})", "/frames: expected an integer, found \"ten\""},
+      {R"({"cloths": [{"grid": {}}], "frames": 0})", "/frames: expected an integer from 1"},
+      {R"({"cloths": [{"grid": {}, "material": {"density": -1}}]})", "/cloths/0/material/density: expected a number > 0"},
+      {R"({"cloths": [{"grid": {"resolution": [0, 4]}}]})", "/cloths/0/grid/resolution/0: expected an integer from 1"},
+      {R"({"cloths": [{"grid": {"size": [1, -2]}}]})", "/cloths/0/grid/size: expected two sizes > 0"},
+      {R"({"cloths": []})", "/cloths: expected at least 1 entries"},
+      {R"({"frames": 3})", "/: missing the required key 'cloths'"},
+      {R"({"cloths": [{"grid": {}, "mesh": "a.obj"}]})", "/cloths/0: expected exactly one of 'grid'"},
+      {R"({"cloths": [{"grid": {}}], "gravity": [0, 0]})", "/gravity: expected an array of 3 numbers"},
+      {R"({"cloths": [{"grid": {}}], "solver": {"type": "lu"}})", "/solver/type: expected one of 'cholmod', 'cg'"},
+      {R"({"cloths": [{"grid": {}}], "collisions": {"method": "quartic"}})", "/collisions/method: expected one of"},
+      {R"({"cloths": [{"grid": {}}], "timestep": 0.007})", "/timestep: expected a timestep that divides frame_time"},
+      {R"({"cloths": [{"grid": {}}], "obstacles": [{"sphere": {"center": [0, 0, 0], "radius": 0}}]})",
+       "/obstacles/0/sphere/radius: expected a number > 0"},
+      {R"({"cloths": [{"grid": {}}], "obstacles": [{"plane": {"normal": [0, 0, 0]}}]})", "/obstacles/0/plane/normal: the normal must not be zero"},
+      {R"({"cloths": [{"grid": {}}], "handles": [{"nodes": [100000]}]})", "/handles/0/nodes/0: vertex 100000 does not exist"},
+      {R"({"cloths": [{"grid": {}}], "handles": [{"cloth": 1, "nodes": [0]}]})", "/handles/0/cloth: expected an integer from 0 to 0"},
+      {R"({"cloths": [{"grid": {}}], "handles": [{"box": {"min": [5, 5, 5], "max": [6, 6, 6]}}]})", "/handles/0/box: the box holds no vertex"},
+      {R"({"cloths": [{"grid": {}}], "handles": [{}]})", "/handles/0: expected 'nodes', 'corners' or 'box'"},
+      {R"({"cloths": [{"grid": {}}], "handles": [{"corners": ["middle"]}]})", "/handles/0/corners/0: expected one of 'bottom-left'"},
+      {R"({"cloths": [{"mesh": "nowhere.obj"}]})", "/cloths/0/mesh: nowhere.obj: no such mesh file"},
+      {R"({"cloths": [{"grid": {}}], "output": {"mesh_format": "xyz"}})", "/output/mesh_format: expected one of"},
+      {R"({"cloths": [{"grid": {}}], "frames": 1e999})", "bad.json: invalid JSON: number overflow"},
+  };
+  for (const Case& c : cases) {
+    const std::string message = error_of(c.text);
+    EXPECT_NE(message.find(c.expected), std::string::npos) << "scene: " << c.text << "\nmessage: " << message;
+  }
+}
+
+TEST(Scene, JsonSyntaxErrorsGiveLineAndColumn) {
+  const std::string message = error_of("{\n  \"cloths\": [\n    {\"grid\": {}},\n  ]\n}");
+  EXPECT_NE(message.find("bad.json: line 4, column 3: invalid JSON"), std::string::npos) << message;
+}
+
+TEST(Scene, BadMeshesAreRejectedWithTheirProblem) {
+  const fs::path dir = temp_dir();
+  std::ofstream(dir / "nonmanifold.obj") << "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 -1 0\nv 0 0 1\nf 1 2 3\nf 1 2 4\nf 1 2 5\n";
+  std::ofstream(dir / "degenerate.obj") << "v 0 0 0\nv 1 0 0\nv 2 0 0\nv 0 1 0\nf 1 2 3\nf 1 2 4\n";
+  std::ofstream(dir / "garbage.obj") << "this is not a mesh\n";
+  std::ofstream(dir / "good.obj") << "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nf 1 2 3\nf 1 3 4\n";
+  const auto scene_with = [&](const std::string& mesh) {
+    return R"({"cloths": [{"mesh": ")" + (dir / mesh).string() + R"("}]})";
+  };
+  EXPECT_NE(error_of(scene_with("nonmanifold.obj")).find("/cloths/0/mesh: " + (dir / "nonmanifold.obj").string() + ": edge (0, 1) is shared by more than two triangles"), std::string::npos)
+      << error_of(scene_with("nonmanifold.obj"));
+  EXPECT_NE(error_of(scene_with("degenerate.obj")).find("zero area"), std::string::npos) << error_of(scene_with("degenerate.obj"));
+  EXPECT_NE(error_of(scene_with("garbage.obj")).find("/cloths/0/mesh:"), std::string::npos) << error_of(scene_with("garbage.obj"));
+  EXPECT_EQ(error_of(scene_with("good.obj")), "");
+  // Corners need a grid.
+  EXPECT_NE(error_of(R"({"cloths": [{"mesh": ")" + (dir / "good.obj").string() + R"("}], "handles": [{"corners": ["top-left"]}]})")
+                .find("/handles/0/corners: corner names need a grid cloth"),
+            std::string::npos);
+}

@@ -1,0 +1,52 @@
+// The frame-statistics comparison behind drape check-stats and the golden regressions.
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <fstream>
+
+#include "drape/core/stats_compare.h"
+
+using namespace drape;
+namespace fs = std::filesystem;
+
+namespace {
+
+fs::path write(const std::string& name, const std::string& text) {
+  const fs::path dir = fs::temp_directory_path() / ("drape_stats_" + std::to_string(::getpid()));
+  fs::create_directories(dir);
+  std::ofstream(dir / name) << text;
+  return dir / name;
+}
+
+const char* HEADER = "frame,sim_time,wall_ms,kinetic_energy,min_distance_obstacle\n";
+
+}  // namespace
+
+TEST(StatsCompare, TimingsAreIgnoredAndSmallDifferencesTolerated) {
+  const auto a = write("a.csv", std::string(HEADER) + "0,0,1.0,0.5,\n1,0.1,9.0,0.25,\n");
+  const auto b = write("b.csv", std::string(HEADER) + "0,0,7.0,0.5,\n1,0.1,2.0,0.2500000001,\n");
+  EXPECT_FALSE(compare_stats(a, b).has_value());
+}
+
+TEST(StatsCompare, ReportsTheFirstFrameAndColumnBeyondTolerance) {
+  const auto a = write("c.csv", std::string(HEADER) + "0,0,1,0.5,0.1\n1,0.1,1,0.25,0.1\n2,0.2,1,0.3,0.1\n");
+  const auto b = write("d.csv", std::string(HEADER) + "0,0,1,0.5,0.1\n1,0.1,1,0.26,0.1\n2,0.2,1,0.4,0.1\n");
+  const auto d = compare_stats(a, b);
+  ASSERT_TRUE(d.has_value());
+  EXPECT_EQ(d->frame, "1");
+  EXPECT_EQ(d->column, "kinetic_energy");
+  EXPECT_NE(d->message.find("frame 1, column kinetic_energy: run 0.25, golden 0.26"), std::string::npos) << d->message;
+}
+
+TEST(StatsCompare, EmptyAgainstAValueAndMissingRowsDiffer) {
+  const auto a = write("e.csv", std::string(HEADER) + "0,0,1,0.5,\n");
+  const auto b = write("f.csv", std::string(HEADER) + "0,0,1,0.5,0.3\n");
+  ASSERT_TRUE(compare_stats(a, b).has_value());
+  EXPECT_EQ(compare_stats(a, b)->column, "min_distance_obstacle");
+  const auto shorter = write("g.csv", std::string(HEADER) + "0,0,1,0.5,0.3\n1,0.1,1,0.5,0.3\n");
+  ASSERT_TRUE(compare_stats(b, shorter).has_value());
+  EXPECT_NE(compare_stats(b, shorter)->message.find("1 frame rows, the golden file 2"), std::string::npos);
+  const auto other_columns = write("h.csv", "frame,sim_time\n0,0\n");
+  EXPECT_TRUE(compare_stats(a, other_columns).has_value());
+  EXPECT_THROW(compare_stats(a, "/nonexistent.csv"), std::runtime_error);
+}

@@ -1,0 +1,19 @@
+#!/usr/bin/env bash
+# Regenerates tests/golden/<scene>.csv from short runs of every shipped scene. The golden
+# regression test compares against these files; run this only when a change of results is
+# intended, and say why in the commit.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+BUILD_DIR=${BUILD_DIR:-build}
+DRAPE="$BUILD_DIR/app/drape"
+declare -A FRAMES=([drape_sphere]=12 [hanging]=15 [flag]=10)
+mkdir -p tests/golden
+for scene in scenes/*.json; do
+  name=$(basename "$scene" .json)
+  frames=${FRAMES[$name]:-10}
+  out=$(mktemp -d)
+  "$DRAPE" run "$scene" --quiet --frames "$frames" --out "$out"
+  cp "$out/stats.csv" "tests/golden/$name.csv"
+  rm -rf "$out"
+  echo "tests/golden/$name.csv: $frames frames"
+done
