@@ -16,6 +16,7 @@ PACKAGES=(
   libfcl-dev           # peer CCD functions compared against in bench/
   libassimp-dev        # mesh input and output
   libsuitesparse-dev   # CHOLMOD sparse Cholesky
+  libopenblas0-serial  # BLAS for CHOLMOD's supernodal factorisation (2x the reference BLAS; serial = deterministic)
   libosmesa6-dev       # off-screen rendering
   ffmpeg               # MP4 encoding
 )
