@@ -20,5 +20,6 @@ Command add_ccd_command(CLI::App& app);
 Command add_run_command(CLI::App& app);
 Command add_validate_command(CLI::App& app);
 Command add_check_stats_command(CLI::App& app);
+Command add_check_command(CLI::App& app);
 
 }  // namespace drape::app

@@ -57,12 +57,17 @@ struct RunArguments {
   int frames = 0;
   std::string out;
   bool quiet = false;
+  int threads = 1;
+  bool check = false;
+  std::string method;
 };
 
 // Loads and builds; prints the error and returns nullopt on bad input.
-std::optional<Model> load_model(const std::string& path, const char* command) {
+std::optional<Model> load_model(const std::string& path, const char* command, const std::string& method = "") {
   try {
-    return build_model(load_scene(path));
+    Scene scene = load_scene(path);
+    if (!method.empty()) scene.collisions.method = *ccd::parse_method(method);
+    return build_model(scene);
   } catch (const SceneError& e) {
     std::cerr << "drape " << command << ": " << e.what() << "\n";
   }
@@ -70,13 +75,15 @@ std::optional<Model> load_model(const std::string& path, const char* command) {
 }
 
 int run(const RunArguments& args) {
-  std::optional<Model> model = load_model(args.scene, "run");
+  std::optional<Model> model = load_model(args.scene, "run", args.method);
   if (!model) return EXIT_BAD_INPUT;
   const Scene& scene = model->scene;
   RunSettings settings;
   settings.out = args.out.empty() ? scene.output.folder : std::filesystem::path(args.out);
   settings.frames = args.frames > 0 ? args.frames : scene.frames;
   settings.write_meshes = scene.output.meshes;
+  settings.threads = args.threads;
+  settings.check_penetrations = args.check;
   if (!args.quiet)
     std::cerr << "drape run: " << args.scene << ": " << model->vertex_count() << " vertices, " << model->springs.size()
               << " springs, " << settings.frames << " frames of " << scene.frame_steps << " steps; output in "
@@ -124,6 +131,12 @@ Command add_run_command(CLI::App& app) {
   cmd->add_option("--frames", args->frames, "Frames to simulate (default: the scene's)")->check(CLI::Range(1, 10000000));
   cmd->add_option("--out", args->out, "Output folder (default: the scene's output.folder)");
   cmd->add_flag("-q,--quiet", args->quiet, "Print nothing but errors");
+  cmd->add_option("-j,--threads", args->threads, "Threads for the collision narrow phase (results do not depend on it)")
+      ->check(CLI::Range(1, 256))
+      ->capture_default_str();
+  cmd->add_option("--ccd", args->method, "CCD method, overriding the scene's collisions.method")
+      ->check(CLI::IsMember({"cubic", "dnf", "vincent", "conservative"}));
+  cmd->add_flag("--check", args->check, "Run the independent penetration check on every frame (column penetrations)");
   return [args] { return run(*args); };
 }
 

@@ -1,8 +1,17 @@
 #include "drape/ccd/batch.h"
 
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+#include <tbb/task_arena.h>
+
 #include <cassert>
 
 namespace drape::ccd {
+
+namespace {
+// Tests per TBB task: a few microseconds of work, enough to amortise the scheduling.
+constexpr std::size_t GRAIN = 256;
+}  // namespace
 
 void BatchCounters::add(const Result& result) {
   ++tests;
@@ -41,19 +50,27 @@ EdgeEdgeQuery gather(const BatchInput& input, const EdgeEdgePair& pair) {
   return q;
 }
 
-BatchOutput run_batch(const BatchInput& input, const Options& options) {
+BatchOutput run_batch(const BatchInput& input, const Options& options, int threads) {
   assert(input.start.size() == input.end.size());
   BatchOutput out;
-  out.vertex_face.reserve(input.vertex_face.size());
-  out.edge_edge.reserve(input.edge_edge.size());
-  for (const VertexFacePair& pair : input.vertex_face) {
-    out.vertex_face.push_back(vertex_face_ccd(gather(input, pair), options));
-    out.counters.add(out.vertex_face.back());
+  out.vertex_face.resize(input.vertex_face.size());
+  out.edge_edge.resize(input.edge_edge.size());
+  const auto vertex_face = [&](std::size_t i) { out.vertex_face[i] = vertex_face_ccd(gather(input, input.vertex_face[i]), options); };
+  const auto edge_edge = [&](std::size_t i) { out.edge_edge[i] = edge_edge_ccd(gather(input, input.edge_edge[i]), options); };
+  if (threads <= 1) {
+    for (std::size_t i = 0; i < out.vertex_face.size(); ++i) vertex_face(i);
+    for (std::size_t i = 0; i < out.edge_edge.size(); ++i) edge_edge(i);
+  } else {
+    tbb::task_arena arena(threads);
+    arena.execute([&] {
+      tbb::parallel_for(tbb::blocked_range<std::size_t>(0, out.vertex_face.size(), GRAIN),
+                        [&](const auto& r) { for (std::size_t i = r.begin(); i < r.end(); ++i) vertex_face(i); });
+      tbb::parallel_for(tbb::blocked_range<std::size_t>(0, out.edge_edge.size(), GRAIN),
+                        [&](const auto& r) { for (std::size_t i = r.begin(); i < r.end(); ++i) edge_edge(i); });
+    });
   }
-  for (const EdgeEdgePair& pair : input.edge_edge) {
-    out.edge_edge.push_back(edge_edge_ccd(gather(input, pair), options));
-    out.counters.add(out.edge_edge.back());
-  }
+  for (const Result& r : out.vertex_face) out.counters.add(r);
+  for (const Result& r : out.edge_edge) out.counters.add(r);
   return out;
 }
 

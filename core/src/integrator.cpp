@@ -9,7 +9,7 @@ namespace drape {
 State initial_state(const Model& model) {
   State s;
   s.positions = model.initial_positions;
-  s.velocities.assign(model.vertex_count(), Vec3::Zero());
+  s.velocities = model.initial_velocities;
   return s;
 }
 
@@ -45,8 +45,13 @@ struct Integrator::Workspace {
   }
 };
 
-Integrator::Integrator(const Model& model, std::unique_ptr<LinearSolver> solver)
+Integrator::Integrator(const Model& model, std::unique_ptr<LinearSolver> solver, int threads)
     : model_(model), solver_(std::move(solver)), work_(std::make_unique<Workspace>()) {
+  if (CollisionPipeline::needed(model)) {
+    CollisionSettings settings;
+    settings.threads = threads;
+    collisions_ = std::make_unique<CollisionPipeline>(model, settings);
+  }
   Workspace& w = *work_;
   const int n = int(model.vertex_count());
   w.free_index.assign(n, -1);
@@ -95,27 +100,30 @@ void add_wind(const Model& model, const State& state, std::vector<Vec3>& forces)
   }
 }
 
-// Inelastic projection out of spheres and planes, with Coulomb friction on the tangential
-// velocity relative to the surface (Bridson, Fedkiw and Anderson 2002, section 7.1).
-int respond_to_analytic_obstacles(const Model& model, State& state) {
+// Spheres and planes: a vertex whose predicted position x0 + h u lies within the thickness of
+// the surface moves (u) to land on it; its velocity (v) loses the approaching normal part and
+// feels Coulomb friction relative to the surface (Bridson, Fedkiw and Anderson 2002, 7.1).
+int respond_to_analytic_obstacles(const Model& model, const std::vector<Vec3>& start, Scalar t_next, Scalar h,
+                                  std::vector<Vec3>& velocities, std::vector<Vec3>& motion) {
   const Scalar thickness = model.scene.collisions.thickness;
   const Scalar mu = model.scene.friction;
   int contacts = 0;
   for (const Obstacle& obstacle : model.obstacles) {
-    if (obstacle.spec.kind == ObstacleSpec::Kind::Mesh) continue;  // the CCD pipeline's job
-    for (std::size_t v = 0; v < state.positions.size(); ++v) {
+    if (obstacle.spec.kind == ObstacleSpec::Kind::Mesh) continue;  // the collision pipeline's
+    for (std::size_t v = 0; v < start.size(); ++v) {
       if (model.pin_of_vertex[v] >= 0) continue;
-      const SurfaceContact c = analytic_contact(obstacle, state.time, state.positions[v]);
+      const Vec3 predicted = start[v] + h * motion[v];
+      const SurfaceContact c = analytic_contact(obstacle, t_next, predicted);
       if (c.signed_distance >= thickness) continue;
       ++contacts;
-      state.positions[v] += (thickness - c.signed_distance) * c.normal;
-      const Vec3 relative = state.velocities[v] - c.surface_velocity;
+      motion[v] = (predicted + (thickness - c.signed_distance) * c.normal - start[v]) / h;
+      const Vec3 relative = velocities[v] - c.surface_velocity;
       const Scalar normal_speed = relative.dot(c.normal);
       if (normal_speed >= 0) continue;  // already separating
       Vec3 tangential = relative - normal_speed * c.normal;
       const Scalar speed = tangential.norm();
       if (speed > 0) tangential *= std::max<Scalar>(0, 1 - mu * -normal_speed / speed);
-      state.velocities[v] = c.surface_velocity + tangential;
+      velocities[v] = c.surface_velocity + tangential;
     }
   }
   return contacts;
@@ -190,16 +198,23 @@ StepReport Integrator::step(State& state) {
     return report;
   }
 
-  // Velocities and positions.
+  // Velocities; the motion of the step starts as the same velocities.
   for (int v = 0; v < n; ++v) {
     const int a = w.free_index[v];
     state.velocities[v] += a >= 0 ? Vec3(w.solution.segment<3>(3 * a)) : pinned_dv[v];
-    state.positions[v] += h * state.velocities[v];
   }
+  std::vector<Vec3> motion = state.velocities;
+  if (m.scene.collisions.obstacles)
+    report.obstacle_contacts = respond_to_analytic_obstacles(m, state.positions, t_next, h, state.velocities, motion);
+  if (collisions_) {
+    // The collision impulses are velocity changes: the state's velocities get them too.
+    const std::vector<Vec3> proposed = motion;
+    report.collisions = collisions_->resolve(state.positions, state.time, h, motion);
+    for (int v = 0; v < n; ++v) state.velocities[v] += motion[v] - proposed[v];
+  }
+  for (int v = 0; v < n; ++v) state.positions[v] += h * motion[v];
   state.time = t_next;
   ++state.steps;
-
-  if (m.scene.collisions.obstacles) report.obstacle_contacts = respond_to_analytic_obstacles(m, state);
 
   // Checks: numbers and bounds.
   for (int v = 0; v < n; ++v) {

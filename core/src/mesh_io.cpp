@@ -42,6 +42,30 @@ TriangleMesh load_mesh(const std::filesystem::path& path) {
   return mesh;
 }
 
+std::vector<Vec3> load_frame_positions(const std::filesystem::path& path, const TriangleMesh& topology) {
+  Assimp::Importer importer;
+  const aiScene* scene = importer.ReadFile(path.string(), aiProcess_Triangulate);
+  if (!scene || !scene->mRootNode) throw MeshFileError(path.string() + ": cannot read the mesh: " + importer.GetErrorString());
+  std::vector<Vec3> positions(topology.vertices.size(), Vec3::Zero());
+  std::size_t face = 0;
+  for (unsigned m = 0; m < scene->mNumMeshes; ++m) {
+    const aiMesh* part = scene->mMeshes[m];
+    for (unsigned f = 0; f < part->mNumFaces; ++f) {
+      if (part->mFaces[f].mNumIndices != 3) continue;
+      if (face >= topology.triangles.size()) break;
+      for (int k = 0; k < 3; ++k) {
+        const aiVector3D& p = part->mVertices[part->mFaces[f].mIndices[k]];
+        positions[topology.triangles[face][k]] = Vec3(p.x, p.y, p.z);
+      }
+      ++face;
+    }
+  }
+  if (face != topology.triangles.size() || scene->mNumMeshes == 0)
+    throw MeshFileError(path.string() + ": expected " + std::to_string(topology.triangles.size()) +
+                        " triangles (the scene's cloth), found " + std::to_string(face));
+  return positions;
+}
+
 bool mesh_format_supported(const std::string& format) {
   Assimp::Exporter exporter;
   const std::string id = assimp_format(format);

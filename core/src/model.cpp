@@ -59,6 +59,7 @@ Model build_model(const Scene& scene) {
     for (const Vec3& v : mesh.vertices) model.initial_positions.push_back(spec.transform.apply(v));
     model.masses.resize(model.initial_positions.size(), 0.0);
     model.air_damping.resize(model.initial_positions.size(), spec.material.air_damping);
+    model.initial_velocities.resize(model.initial_positions.size(), spec.velocity);
     for (const Triangle& t : mesh.triangles) {
       const Triangle global{t[0] + offset, t[1] + offset, t[2] + offset};
       model.triangles.push_back(global);
@@ -106,6 +107,7 @@ Model build_model(const Scene& scene) {
       if (found == 0) fail(scene, path + "/box", "the box holds no vertex of cloth " + std::to_string(handle.cloth));
     }
     for (int v : chosen) {
+      model.initial_velocities[v] = handle.motion.velocity_at(model.initial_positions[v], 0);
       if (model.pin_of_vertex[v] >= 0) continue;  // already pinned by an earlier handle
       model.pin_of_vertex[v] = int(model.pins.size());
       model.pins.push_back({v, int(h)});

@@ -7,21 +7,30 @@
 
 #include "drape/core/mesh_io.h"
 #include "drape/core/obstacle.h"
+#include "drape/core/penetration.h"
 
 namespace drape {
 
 std::string stats_header() {
   return "frame,sim_time,wall_ms,solve_ms,solver_iterations,kinetic_energy,potential_energy,max_stretch,"
-         "min_distance_obstacle,obstacle_contacts,solver_warnings";
+         "min_distance_obstacle,obstacle_contacts,solver_warnings,bvh_pairs,vf_tests,ee_tests,culled,root_solves,"
+         "ccd_hits,impulse_iterations,impact_zones,proximity_impulses,fail_safes,ccd_ms,response_ms,penetrations";
 }
 
 std::string stats_row(const FrameStats& s) {
-  char buffer[512];
+  char buffer[1024];
   char distance[32] = "";
   if (s.min_distance_obstacle) std::snprintf(distance, sizeof distance, "%.17g", *s.min_distance_obstacle);
-  std::snprintf(buffer, sizeof buffer, "%d,%.17g,%.3f,%.3f,%ld,%.17g,%.17g,%.17g,%s,%d,%d", s.frame, s.sim_time, s.wall_ms,
-                s.solve_ms, s.solver_iterations, s.kinetic_energy, s.potential_energy, s.max_stretch, distance,
-                s.obstacle_contacts, s.solver_warnings);
+  char penetrations[16] = "";
+  if (s.penetrations) std::snprintf(penetrations, sizeof penetrations, "%d", *s.penetrations);
+  const CollisionCounters& c = s.collisions;
+  std::snprintf(buffer, sizeof buffer,
+                "%d,%.17g,%.3f,%.3f,%ld,%.17g,%.17g,%.17g,%s,%d,%d,%ld,%ld,%ld,%llu,%llu,%ld,%ld,%ld,%ld,%ld,%.3f,%.3f,%s",
+                s.frame, s.sim_time, s.wall_ms, s.solve_ms, s.solver_iterations, s.kinetic_energy, s.potential_energy,
+                s.max_stretch, distance, s.obstacle_contacts, s.solver_warnings, c.bvh_pairs, c.vf_tests, c.ee_tests,
+                static_cast<unsigned long long>(c.tests.culled), static_cast<unsigned long long>(c.tests.root_solves),
+                c.ccd_hits, c.impulse_iterations, c.impact_zones, c.proximity_impulses, c.fail_safes, c.ccd_ms,
+                c.response_ms, penetrations);
   return buffer;
 }
 
@@ -79,17 +88,20 @@ RunOutcome run_simulation(const Model& model, const RunSettings& settings, const
     std::filesystem::copy_file(model.scene.file, settings.out / "scene.json",
                                std::filesystem::copy_options::overwrite_existing, error);
     if (error) throw std::runtime_error((settings.out / "scene.json").string() + ": cannot copy the scene: " + error.message());
+    // Where the scene came from: its mesh paths are relative to that folder.
+    std::ofstream(settings.out / "scene_path.txt") << std::filesystem::absolute(model.scene.file).string() << "\n";
   }
   StatsFile stats(stats_path(settings.out));
   const std::string& format = model.scene.output.mesh_format;
-  const auto write_frame = [&](const State& state, const FrameStats& row) {
+  const auto write_frame = [&](const State& state, FrameStats row) {
+    if (settings.check_penetrations) row.penetrations = int(find_penetrations(model, state.positions, state.time).size());
     if (settings.write_meshes) save_mesh(mesh_path(settings.out, row.frame, format), model.cloth_mesh(state.positions), format);
     stats.write(stats_row(row));
     if (on_frame) on_frame(row);
   };
 
   State state = initial_state(model);
-  Integrator integrator(model, make_linear_solver(model.scene.solver));
+  Integrator integrator(model, make_linear_solver(model.scene.solver), settings.threads);
   write_frame(state, measure(model, state, 0));
 
   RunOutcome outcome;
@@ -108,6 +120,7 @@ RunOutcome run_simulation(const Model& model, const RunSettings& settings, const
       totals.solver_iterations += r.solver_iterations;
       totals.obstacle_contacts += r.obstacle_contacts;
       totals.solver_warnings += !r.solver_converged;
+      totals.collisions.add(r.collisions);
       if (!r.ok) {
         outcome.end = RunEnd::Stopped;
         outcome.message = "frame " + std::to_string(frame) + " (t = " + std::to_string(state.time) + " s): " +
@@ -121,6 +134,7 @@ RunOutcome run_simulation(const Model& model, const RunSettings& settings, const
     row.solver_iterations = totals.solver_iterations;
     row.obstacle_contacts = totals.obstacle_contacts;
     row.solver_warnings = totals.solver_warnings;
+    row.collisions = totals.collisions;
     write_frame(state, row);
     outcome.frames_done = frame;
   }

@@ -181,7 +181,7 @@ Box read_box(const Node& n) {
 }
 
 ClothSpec read_cloth(const Node& n) {
-  n.allow({"mesh", "grid", "transform", "material"});
+  n.allow({"mesh", "grid", "transform", "material", "velocity"});
   ClothSpec c;
   if (n.has("grid") == n.has("mesh")) n.fail("expected exactly one of 'grid' (the built-in generator) or 'mesh' (a file)");
   if (n.has("grid")) {
@@ -206,6 +206,7 @@ ClothSpec read_cloth(const Node& n) {
     c.mesh_file = n.at("mesh").file_path();
   }
   if (n.has("transform")) c.transform = read_transform(n.at("transform"));
+  if (n.has("velocity")) c.velocity = n.at("velocity").vec3();
   if (n.has("material")) {
     const Node m = n.at("material");
     m.allow({"density", "stretch", "shear", "bend", "damping", "air_damping"});

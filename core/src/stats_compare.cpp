@@ -23,6 +23,8 @@ const std::map<std::string, ColumnTolerance>& stats_tolerances() {
       {"min_distance_obstacle", {1e-7, 1e-6}},
       {"obstacle_contacts", {2, 0.05}},
       {"solver_warnings", {0, 0}},
+      {"penetrations", {0, 0}},
+      {"fail_safes", {0, 0}},
   };
   return tolerances;
 }

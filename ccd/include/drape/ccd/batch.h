@@ -46,8 +46,10 @@ struct BatchOutput {
   BatchCounters counters;
 };
 
-/// Runs every test of the batch with options.method. Indices must lie in [0, start.size()).
-BatchOutput run_batch(const BatchInput& input, const Options& options);
+/// Runs every test of the batch with options.method, on up to threads threads (TBB). Each
+/// result lands at its pair's index and the counters are summed afterwards in order, so the
+/// output does not depend on the thread count. Indices must lie in [0, start.size()).
+BatchOutput run_batch(const BatchInput& input, const Options& options, int threads = 1);
 
 /// The query of one pair, gathered from the vertex arrays.
 VertexFaceQuery gather(const BatchInput& input, const VertexFacePair& pair);

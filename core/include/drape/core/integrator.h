@@ -9,6 +9,7 @@
 #include <memory>
 #include <string>
 
+#include "drape/core/collision.h"
 #include "drape/core/linear_solver.h"
 #include "drape/core/model.h"
 
@@ -31,15 +32,18 @@ struct StepReport {
   bool solver_converged = true;
   double solve_ms = 0;        ///< assembly excluded
   int obstacle_contacts = 0;  ///< vertices projected out of analytic obstacles
+  CollisionCounters collisions;  ///< the collision pipeline's work (zero when not needed)
 };
 
 /// Holds what a run reuses from step to step: the system's sparsity pattern with each spring's
 /// place in it, and the linear solver (whose symbolic analysis CHOLMOD keeps).
 class Integrator {
  public:
-  Integrator(const Model& model, std::unique_ptr<LinearSolver> solver);
+  /// threads: for the collision pipeline's narrow phase (results do not depend on it).
+  Integrator(const Model& model, std::unique_ptr<LinearSolver> solver, int threads = 1);
   ~Integrator();
-  /// One step of the scene's timestep: forces -> implicit solve -> obstacle response -> checks.
+  /// One step of the scene's timestep: forces -> implicit solve -> analytic obstacles ->
+  /// collision pipeline (broad phase, narrow phase, response) -> positions -> checks.
   StepReport step(State& state);
   const LinearSolver& solver() const { return *solver_; }
 
@@ -47,6 +51,7 @@ class Integrator {
   struct Workspace;
   const Model& model_;
   std::unique_ptr<LinearSolver> solver_;
+  std::unique_ptr<CollisionPipeline> collisions_;  // only when the scene needs it
   std::unique_ptr<Workspace> work_;
 };
 

@@ -22,6 +22,11 @@ class MeshFileError : public std::runtime_error {
 /// Throws MeshFileError; does not validate the mesh (see mesh_problem).
 TriangleMesh load_mesh(const std::filesystem::path& path);
 
+/// The positions of a saved frame of a known mesh: the file's triangles, in order, are the
+/// mesh's triangles, so each corner gives its vertex's position (no welding, so vertices that
+/// happen to coincide stay apart). Throws MeshFileError when the triangle count differs.
+std::vector<Vec3> load_frame_positions(const std::filesystem::path& path, const TriangleMesh& topology);
+
 /// Writes the mesh atomically (a temporary file renamed into place), so a reader never sees a
 /// truncated mesh. format: "obj" (without a material file), "ply", "stl", or any assimp export
 /// format id. Throws MeshFileError.

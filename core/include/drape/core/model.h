@@ -43,6 +43,7 @@ struct Obstacle {
 struct Model {
   Scene scene;
   std::vector<Vec3> initial_positions;  ///< all cloths, concatenated
+  std::vector<Vec3> initial_velocities;
   std::vector<Scalar> masses;           ///< lumped: density * area / 3 from each triangle
   std::vector<Scalar> air_damping;      ///< per vertex, 1/s (its cloth's material)
   std::vector<Triangle> triangles;      ///< global vertex indices

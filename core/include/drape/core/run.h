@@ -26,6 +26,8 @@ struct FrameStats {
   std::optional<Scalar> min_distance_obstacle;  ///< empty when the scene has no obstacle
   int obstacle_contacts = 0;   ///< vertex projections out of analytic obstacles, summed
   int solver_warnings = 0;     ///< cg solves that stopped at the iteration cap
+  CollisionCounters collisions;  ///< the collision pipeline, summed over the frame's steps
+  std::optional<int> penetrations;  ///< intersecting triangle pairs by the independent check, when enabled
 };
 
 std::string stats_header();
@@ -35,6 +37,8 @@ struct RunSettings {
   std::filesystem::path out;  ///< output folder (created)
   int frames = 0;             ///< frames to simulate after frame 0 (the initial state)
   bool write_meshes = true;
+  int threads = 1;            ///< collision narrow-phase threads
+  bool check_penetrations = false;  ///< run the independent intersection check on every frame
 };
 
 enum class RunEnd { Completed, Stopped, Interrupted };

@@ -71,6 +71,7 @@ struct ClothSpec {
   std::filesystem::path mesh_file;    ///< a mesh read by assimp (resolved against the scene's folder)
   Transform transform;
   Material material;
+  Vec3 velocity = Vec3::Zero();  ///< initial velocity of every vertex (m/s)
 };
 
 struct Box {

@@ -1,0 +1,128 @@
+#include "drape/ccd/broad_phase.h"
+
+#include <BulletCollision/BroadphaseCollision/btDbvt.h>
+
+#include <algorithm>
+
+namespace drape::ccd {
+
+Aabb swept_box(const std::array<std::int32_t, 3>& triangle, std::span<const Vec3> start, std::span<const Vec3> end,
+               Scalar margin) {
+  Aabb box{start[triangle[0]], start[triangle[0]]};
+  for (int k = 0; k < 3; ++k) {
+    box.min = box.min.cwiseMin(start[triangle[k]]).cwiseMin(end[triangle[k]]);
+    box.max = box.max.cwiseMax(start[triangle[k]]).cwiseMax(end[triangle[k]]);
+  }
+  box.min.array() -= margin;
+  box.max.array() += margin;
+  return box;
+}
+
+namespace {
+
+btDbvtVolume volume_of(const Aabb& box) {
+  return btDbvtVolume::FromMM(btVector3(box.min.x(), box.min.y(), box.min.z()),
+                              btVector3(box.max.x(), box.max.y(), box.max.z()));
+}
+
+// Collects the leaf indices (stored in the leaves' data) of overlapping pairs.
+struct PairCollector : btDbvt::ICollide {
+  std::vector<std::pair<std::int32_t, std::int32_t>> pairs;
+  bool self = false;
+  void Process(const btDbvtNode* a, const btDbvtNode* b) override {
+    auto i = static_cast<std::int32_t>(reinterpret_cast<std::intptr_t>(a->data));
+    auto j = static_cast<std::int32_t>(reinterpret_cast<std::intptr_t>(b->data));
+    if (self && i > j) std::swap(i, j);
+    pairs.emplace_back(i, j);
+  }
+};
+
+// Bullet's incremental optimisation passes after each update (tree quality against cost).
+constexpr int OPTIMIZE_PASSES = 1;
+
+}  // namespace
+
+struct BoxTree::Impl {
+  btDbvt tree;
+  std::vector<btDbvtNode*> leaves;
+};
+
+BoxTree::BoxTree() : impl_(std::make_unique<Impl>()) {}
+BoxTree::~BoxTree() = default;
+BoxTree::BoxTree(BoxTree&&) noexcept = default;
+BoxTree& BoxTree::operator=(BoxTree&&) noexcept = default;
+
+void BoxTree::update(std::span<const Aabb> boxes) {
+  Impl& m = *impl_;
+  if (m.leaves.size() != boxes.size()) {
+    m.tree.clear();
+    m.leaves.clear();
+    for (std::size_t i = 0; i < boxes.size(); ++i)
+      m.leaves.push_back(m.tree.insert(volume_of(boxes[i]), reinterpret_cast<void*>(static_cast<std::intptr_t>(i))));
+    return;
+  }
+  for (std::size_t i = 0; i < boxes.size(); ++i) {
+    btDbvtVolume volume = volume_of(boxes[i]);
+    m.tree.update(m.leaves[i], volume);
+  }
+  m.tree.optimizeIncremental(OPTIMIZE_PASSES);
+}
+
+std::size_t BoxTree::size() const { return impl_->leaves.size(); }
+
+std::vector<std::pair<std::int32_t, std::int32_t>> BoxTree::self_pairs() const {
+  PairCollector collector;
+  collector.self = true;
+  impl_->tree.collideTT(impl_->tree.m_root, impl_->tree.m_root, collector);
+  std::sort(collector.pairs.begin(), collector.pairs.end());
+  return std::move(collector.pairs);
+}
+
+std::vector<std::pair<std::int32_t, std::int32_t>> BoxTree::pairs_with(const BoxTree& other) const {
+  PairCollector collector;
+  impl_->tree.collideTT(impl_->tree.m_root, other.impl_->tree.m_root, collector);
+  std::sort(collector.pairs.begin(), collector.pairs.end());
+  return std::move(collector.pairs);
+}
+
+Candidates feature_pairs(std::span<const TriangleIndices> triangles_a, std::span<const TriangleIndices> triangles_b,
+                         std::span<const std::pair<std::int32_t, std::int32_t>> pairs) {
+  Candidates out;
+  std::vector<std::array<std::int32_t, 4>> vf, ee;  // (vertex, face corners) and (edge, edge), canonical
+  vf.reserve(pairs.size() * 6);
+  ee.reserve(pairs.size() * 9);
+  const auto shares = [](std::int32_t v, const TriangleIndices& t) { return v == t[0] || v == t[1] || v == t[2]; };
+  const auto add_vertex_face = [&](const TriangleIndices& from, const TriangleIndices& face) {
+    for (std::int32_t v : from)
+      if (!shares(v, face)) vf.push_back({v, face[0], face[1], face[2]});
+  };
+  for (const auto& [ia, ib] : pairs) {
+    const TriangleIndices& a = triangles_a[ia];
+    const TriangleIndices& b = triangles_b[ib];
+    add_vertex_face(a, b);
+    add_vertex_face(b, a);
+    for (int i = 0; i < 3; ++i) {
+      std::array<std::int32_t, 2> e{a[i], a[(i + 1) % 3]};
+      if (e[0] > e[1]) std::swap(e[0], e[1]);
+      for (int j = 0; j < 3; ++j) {
+        std::array<std::int32_t, 2> f{b[j], b[(j + 1) % 3]};
+        if (f[0] > f[1]) std::swap(f[0], f[1]);
+        if (e[0] == f[0] || e[0] == f[1] || e[1] == f[0] || e[1] == f[1]) continue;
+        // The same two edges can come from (a, b) or (b, a): order them.
+        if (f < e) ee.push_back({f[0], f[1], e[0], e[1]});
+        else ee.push_back({e[0], e[1], f[0], f[1]});
+      }
+    }
+  }
+  std::sort(vf.begin(), vf.end());
+  vf.erase(std::unique(vf.begin(), vf.end()), vf.end());
+  std::sort(ee.begin(), ee.end());
+  ee.erase(std::unique(ee.begin(), ee.end()), ee.end());
+  out.vertex_face.reserve(vf.size());
+  for (const auto& k : vf) out.vertex_face.push_back({k[0], {k[1], k[2], k[3]}});
+  out.edge_edge.reserve(ee.size());
+  for (const auto& k : ee) out.edge_edge.push_back({{k[0], k[1]}, {k[2], k[3]}});
+  return out;
+}
+
+}  // namespace drape::ccd

@@ -1,0 +1,67 @@
+#pragma once
+/// \file
+/// The collision pipeline of a step (Bridson, Fedkiw and Anderson, "Robust treatment of
+/// collisions, contact and friction for cloth animation", SIGGRAPH 2002; Harmon et al.,
+/// "Robust treatment of simultaneous collisions", SIGGRAPH 2008): given the start positions,
+/// which are intersection-free, and the velocities the solver proposes, it changes the
+/// velocities until the straight-line motion of the step is free of collisions, cloth against
+/// itself and against mesh obstacles:
+///   broad phase (btDbvt over swept triangle boxes) -> elementary tests (the scene's CCD
+///   method, in parallel) -> proximity repulsion within the thickness -> CCD impulses,
+///   iterated -> rigid impact zones -> the fail-safe (colliding vertices keep their start
+///   positions, then all cloth vertices do).
+
+#include <memory>
+
+#include "drape/ccd/batch.h"
+#include "drape/core/model.h"
+
+namespace drape {
+
+/// Accuracy and effort knobs of the response, with their defaults.
+struct CollisionSettings {
+  int max_impulse_iterations = 8;  ///< CCD-impulse rounds before impact zones take over
+  int max_zone_iterations = 16;    ///< impact-zone rounds before the fail-safe
+  /// Separation speed an impulse leaves between colliding features, as a fraction of
+  /// thickness / h: enough that the next round does not find the same contact again.
+  Scalar separation_fraction = 0.1;
+  /// Proximity repulsion: features closer than the thickness at the start get a separating
+  /// normal velocity of this fraction of (thickness - distance) / h.
+  Scalar repulsion_fraction = 0.25;
+  int threads = 1;  ///< narrow-phase threads (results do not depend on it)
+};
+
+/// What the pipeline did in one step; summed into the frame statistics.
+struct CollisionCounters {
+  long bvh_pairs = 0;           ///< overlapping triangle pairs, summed over detection rounds
+  ccd::BatchCounters tests;     ///< elementary tests (vertex-face + edge-edge), culled, ...
+  long vf_tests = 0, ee_tests = 0;
+  long ccd_hits = 0;            ///< collisions found, summed over rounds
+  long proximity_impulses = 0;
+  long impulse_iterations = 0;  ///< CCD-impulse rounds that found collisions
+  long impact_zones = 0;        ///< zones formed (counted each round)
+  long fail_safes = 0;          ///< steps that needed the fail-safe
+  double ccd_ms = 0;            ///< broad and narrow phase
+  double response_ms = 0;       ///< everything else
+  void add(const CollisionCounters& other);
+};
+
+class CollisionPipeline {
+ public:
+  CollisionPipeline(const Model& model, const CollisionSettings& settings);
+  ~CollisionPipeline();
+  /// start: positions at time t (intersection-free). motion: proposed velocities, changed in
+  /// place so that start + h motion is free of collisions. Kinematic vertices (pinned cloth
+  /// vertices, obstacles) are never changed.
+  CollisionCounters resolve(const std::vector<Vec3>& start, Scalar t, Scalar h, std::vector<Vec3>& motion);
+
+  /// Whether the scene needs the pipeline at all (self-collision on, or mesh obstacles with
+  /// obstacle collisions on): a scene pays only for what it asks for.
+  static bool needed(const Model& model);
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace drape

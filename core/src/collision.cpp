@@ -1,0 +1,337 @@
+#include "drape/core/collision.h"
+
+#include <chrono>
+#include <numeric>
+
+#include "drape/ccd/broad_phase.h"
+#include "drape/ccd/distance.h"
+#include "drape/core/obstacle.h"
+
+namespace drape {
+
+void CollisionCounters::add(const CollisionCounters& o) {
+  bvh_pairs += o.bvh_pairs;
+  tests += o.tests;
+  vf_tests += o.vf_tests;
+  ee_tests += o.ee_tests;
+  ccd_hits += o.ccd_hits;
+  proximity_impulses += o.proximity_impulses;
+  impulse_iterations += o.impulse_iterations;
+  impact_zones += o.impact_zones;
+  fail_safes += o.fail_safes;
+  ccd_ms += o.ccd_ms;
+  response_ms += o.response_ms;
+}
+
+bool CollisionPipeline::needed(const Model& model) {
+  if (model.scene.collisions.self) return true;
+  if (!model.scene.collisions.obstacles) return false;
+  for (const Obstacle& o : model.obstacles)
+    if (o.spec.kind == ObstacleSpec::Kind::Mesh) return true;
+  return false;
+}
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+double ms_since(Clock::time_point begin) { return std::chrono::duration<double, std::milli>(Clock::now() - begin).count(); }
+
+// A contact between four vertices: the relative velocity along normal is sum_k weight_k v_k . n.
+struct Contact {
+  std::array<int, 4> vertex{};
+  std::array<Scalar, 4> weight{};
+  Vec3 normal = Vec3::UnitZ();
+};
+
+// Union-find over vertices, for impact zones.
+struct Zones {
+  std::vector<int> parent;
+  explicit Zones(int n) : parent(n) { std::iota(parent.begin(), parent.end(), 0); }
+  int find(int v) { return parent[v] == v ? v : parent[v] = find(parent[v]); }
+  void join(int a, int b) {
+    a = find(a), b = find(b);
+    if (a != b) parent[std::max(a, b)] = std::min(a, b);  // deterministic representative
+  }
+};
+
+}  // namespace
+
+struct CollisionPipeline::Impl {
+  const Model& model;
+  CollisionSettings settings;
+  int cloth_vertices = 0;
+  std::vector<ccd::TriangleIndices> cloth_triangles;
+  struct MeshObstacle {
+    const Obstacle* obstacle;
+    int first_vertex;
+    std::vector<ccd::TriangleIndices> triangles;  // indices into the combined vertex array
+    ccd::BoxTree tree;
+  };
+  std::vector<MeshObstacle> obstacles;
+  ccd::BoxTree cloth_tree;
+  std::vector<Scalar> inverse_mass;  // combined array; 0 for kinematic vertices
+  std::vector<Vec3> start, end;      // combined positions at t and t + h
+  std::vector<ccd::Aabb> boxes;
+  ccd::Options options;
+
+  explicit Impl(const Model& m, const CollisionSettings& s) : model(m), settings(s) {
+    cloth_vertices = int(m.vertex_count());
+    for (const Triangle& t : m.triangles) cloth_triangles.push_back({t[0], t[1], t[2]});
+    int offset = cloth_vertices;
+    if (m.scene.collisions.obstacles) {
+      for (const Obstacle& o : m.obstacles) {
+        if (o.spec.kind != ObstacleSpec::Kind::Mesh) continue;
+        MeshObstacle mo{&o, offset, {}, {}};
+        for (const Triangle& t : o.mesh.triangles) mo.triangles.push_back({t[0] + offset, t[1] + offset, t[2] + offset});
+        offset += int(o.mesh.vertices.size());
+        obstacles.push_back(std::move(mo));
+      }
+    }
+    inverse_mass.assign(offset, 0.0);
+    for (int v = 0; v < cloth_vertices; ++v)
+      if (m.pin_of_vertex[v] < 0) inverse_mass[v] = 1.0 / m.masses[v];
+    start.resize(offset);
+    end.resize(offset);
+    options.method = m.scene.collisions.method;
+    options.thickness = 0;  // exact contact; the thickness is kept by proximity repulsion
+  }
+
+  // Candidate elementary tests for the motion start -> end, boxes grown by margin.
+  ccd::Candidates candidates(Scalar margin, CollisionCounters& counters) {
+    ccd::Candidates all;
+    boxes.resize(cloth_triangles.size());
+    for (std::size_t i = 0; i < cloth_triangles.size(); ++i) boxes[i] = ccd::swept_box(cloth_triangles[i], start, end, margin);
+    cloth_tree.update(boxes);
+    const auto append = [&](ccd::Candidates&& c) {
+      all.vertex_face.insert(all.vertex_face.end(), c.vertex_face.begin(), c.vertex_face.end());
+      all.edge_edge.insert(all.edge_edge.end(), c.edge_edge.begin(), c.edge_edge.end());
+    };
+    if (model.scene.collisions.self) {
+      const auto pairs = cloth_tree.self_pairs();
+      counters.bvh_pairs += long(pairs.size());
+      append(ccd::feature_pairs(cloth_triangles, cloth_triangles, pairs));
+    }
+    for (MeshObstacle& mo : obstacles) {
+      std::vector<ccd::Aabb> obstacle_boxes(mo.triangles.size());
+      for (std::size_t i = 0; i < mo.triangles.size(); ++i) obstacle_boxes[i] = ccd::swept_box(mo.triangles[i], start, end, margin);
+      mo.tree.update(obstacle_boxes);
+      const auto pairs = cloth_tree.pairs_with(mo.tree);
+      counters.bvh_pairs += long(pairs.size());
+      append(ccd::feature_pairs(cloth_triangles, mo.triangles, pairs));
+    }
+    return all;
+  }
+
+  void set_end(Scalar h, const std::vector<Vec3>& motion) {
+    for (int v = 0; v < cloth_vertices; ++v) end[v] = start[v] + h * motion[v];
+  }
+
+  // Velocity of any vertex of the combined array: cloth from motion, obstacles from their poses.
+  Vec3 velocity(int v, Scalar h, const std::vector<Vec3>& motion) const {
+    return v < cloth_vertices ? motion[v] : Vec3((end[v] - start[v]) / h);
+  }
+
+  // Applies the impulse that brings the contact's normal relative velocity up to target.
+  bool impulse(const Contact& c, Scalar target, Scalar h, std::vector<Vec3>& motion) const {
+    Scalar normal_speed = 0, denominator = 0;
+    for (int k = 0; k < 4; ++k) {
+      normal_speed += c.weight[k] * velocity(c.vertex[k], h, motion).dot(c.normal);
+      denominator += c.weight[k] * c.weight[k] * inverse_mass[c.vertex[k]];
+    }
+    if (normal_speed >= target || !(denominator > 0)) return false;
+    const Scalar magnitude = (target - normal_speed) / denominator;
+    for (int k = 0; k < 4; ++k)
+      if (c.vertex[k] < cloth_vertices) motion[c.vertex[k]] += c.weight[k] * inverse_mass[c.vertex[k]] * magnitude * c.normal;
+    return true;
+  }
+
+  // The contact of a vertex-face or edge-edge pair: weights from the closest points at time s
+  // of the step, normal from the features at toc oriented as they were at the start.
+  Contact contact(bool vertex_face, const std::array<int, 4>& v, Scalar toc) const {
+    const auto at = [&](int k, Scalar s) -> Vec3 { return start[v[k]] + s * (end[v[k]] - start[v[k]]); };
+    Contact c;
+    c.vertex = v;
+    if (vertex_face) {
+      const auto closest = ccd::closest_point_triangle<Scalar>(at(0, toc), at(1, toc), at(2, toc), at(3, toc));
+      const Scalar wb = closest.weight_b, wc = closest.weight_c;
+      c.weight = {1, -(1 - wb - wc), -wb, -wc};
+      Vec3 n = (at(2, toc) - at(1, toc)).cross(at(3, toc) - at(1, toc));
+      const Vec3 offset_at_start = at(0, 0) - ccd::closest_point_triangle<Scalar>(at(0, 0), at(1, 0), at(2, 0), at(3, 0)).point;
+      if (!(n.norm() > 0)) n = offset_at_start;
+      if (n.dot(offset_at_start) < 0) n = -n;
+      c.normal = n.norm() > 0 ? Vec3(n.normalized()) : Vec3::UnitZ();
+    } else {
+      const auto closest = ccd::closest_segment_segment<Scalar>(at(0, toc), at(1, toc), at(2, toc), at(3, toc));
+      c.weight = {1 - closest.s, closest.s, -(1 - closest.u), -closest.u};
+      Vec3 n = (at(1, toc) - at(0, toc)).cross(at(3, toc) - at(2, toc));
+      const auto at_start = ccd::closest_segment_segment<Scalar>(at(0, 0), at(1, 0), at(2, 0), at(3, 0));
+      const Vec3 offset_at_start = at_start.point_a - at_start.point_b;
+      if (!(n.squaredNorm() > 1e-12 * (at(1, toc) - at(0, toc)).squaredNorm() * (at(3, toc) - at(2, toc)).squaredNorm()))
+        n = offset_at_start;
+      if (n.dot(offset_at_start) < 0) n = -n;
+      c.normal = n.norm() > 0 ? Vec3(n.normalized()) : Vec3::UnitZ();
+    }
+    return c;
+  }
+
+  // The time of contact the response uses: vincent's for any method that agrees on the hit,
+  // so that the method chosen changes the cost of detection, never the simulation (cubic and
+  // dnf find the same roots, to rounding; those last bits would otherwise grow into different
+  // trajectories). Where vincent sees no hit (conservative's near misses), the method's own.
+  Scalar canonical_toc(ccd::QueryKind kind, const ccd::Query& query, Scalar toc) const {
+    if (options.method == ccd::Method::Vincent) return toc;
+    ccd::Options vincent = options;
+    vincent.method = ccd::Method::Vincent;
+    const ccd::Result r = ccd::elementary_ccd(kind, query, vincent);
+    return r.hit ? r.toc : toc;
+  }
+
+  // One detection round: the collisions of the current motion.
+  std::vector<std::pair<Contact, Scalar>> detect(Scalar h, const std::vector<Vec3>& motion, CollisionCounters& counters,
+                                                 ccd::Candidates* keep = nullptr) {
+    const auto begin = Clock::now();
+    set_end(h, motion);
+    ccd::Candidates c = candidates(model.scene.collisions.thickness, counters);
+    const ccd::BatchInput input{start, end, c.vertex_face, c.edge_edge};
+    const ccd::BatchOutput out = ccd::run_batch(input, options, settings.threads);
+    counters.tests += out.counters;
+    counters.vf_tests += long(c.vertex_face.size());
+    counters.ee_tests += long(c.edge_edge.size());
+    std::vector<std::pair<Contact, Scalar>> hits;
+    for (std::size_t i = 0; i < c.vertex_face.size(); ++i) {
+      if (!out.vertex_face[i].hit) continue;
+      const auto& p = c.vertex_face[i];
+      const Scalar toc = canonical_toc(ccd::QueryKind::VertexFace, ccd::gather(input, p), out.vertex_face[i].toc);
+      hits.emplace_back(contact(true, {p.vertex, p.face[0], p.face[1], p.face[2]}, toc), toc);
+    }
+    for (std::size_t i = 0; i < c.edge_edge.size(); ++i) {
+      if (!out.edge_edge[i].hit) continue;
+      const auto& p = c.edge_edge[i];
+      const Scalar toc = canonical_toc(ccd::QueryKind::EdgeEdge, ccd::gather(input, p), out.edge_edge[i].toc);
+      hits.emplace_back(contact(false, {p.edge_a[0], p.edge_a[1], p.edge_b[0], p.edge_b[1]}, toc), toc);
+    }
+    counters.ccd_hits += long(hits.size());
+    counters.ccd_ms += ms_since(begin);
+    if (keep) *keep = std::move(c);
+    return hits;
+  }
+
+  // Proximity repulsion: features closer than the thickness at the start move apart.
+  void repel(const ccd::Candidates& c, Scalar h, std::vector<Vec3>& motion, CollisionCounters& counters) {
+    const Scalar thickness = model.scene.collisions.thickness;
+    const auto push = [&](Contact contact, const Vec3& offset) {
+      const Scalar distance = offset.norm();
+      if (!(distance < thickness) || !(distance > 0)) return;
+      contact.normal = offset / distance;
+      if (impulse(contact, settings.repulsion_fraction * (thickness - distance) / h, h, motion)) ++counters.proximity_impulses;
+    };
+    for (const auto& p : c.vertex_face) {
+      const auto closest = ccd::closest_point_triangle<Scalar>(start[p.vertex], start[p.face[0]], start[p.face[1]], start[p.face[2]]);
+      Contact contact;
+      contact.vertex = {p.vertex, p.face[0], p.face[1], p.face[2]};
+      contact.weight = {1, -(1 - closest.weight_b - closest.weight_c), -closest.weight_b, -closest.weight_c};
+      push(contact, start[p.vertex] - closest.point);
+    }
+    for (const auto& p : c.edge_edge) {
+      const auto closest = ccd::closest_segment_segment<Scalar>(start[p.edge_a[0]], start[p.edge_a[1]], start[p.edge_b[0]], start[p.edge_b[1]]);
+      Contact contact;
+      contact.vertex = {p.edge_a[0], p.edge_a[1], p.edge_b[0], p.edge_b[1]};
+      contact.weight = {1 - closest.s, closest.s, -(1 - closest.u), -closest.u};
+      push(contact, closest.point_a - closest.point_b);
+    }
+  }
+
+  // Rigid impact zones: each zone's cloth vertices move with the zone's rigid motion (its
+  // momentum and angular momentum kept), or with its kinematic vertices when it holds any.
+  void apply_zones(Zones& zones, Scalar h, std::vector<Vec3>& motion, CollisionCounters& counters) {
+    std::vector<std::vector<int>> members(start.size());
+    for (int v = 0; v < int(start.size()); ++v) members[zones.find(v)].push_back(v);
+    for (const auto& zone : members) {
+      if (zone.size() < 2) continue;
+      ++counters.impact_zones;
+      Vec3 kinematic_velocity = Vec3::Zero();
+      int kinematic = 0;
+      Scalar mass = 0;
+      Vec3 momentum = Vec3::Zero(), centre = Vec3::Zero();
+      for (int v : zone) {
+        if (inverse_mass[v] == 0) {
+          kinematic_velocity += velocity(v, h, motion);
+          ++kinematic;
+          continue;
+        }
+        const Scalar m = 1 / inverse_mass[v];
+        mass += m;
+        momentum += m * motion[v];
+        centre += m * start[v];
+      }
+      if (kinematic > 0) {
+        for (int v : zone)
+          if (v < cloth_vertices && inverse_mass[v] > 0) motion[v] = kinematic_velocity / kinematic;
+        continue;
+      }
+      centre /= mass;
+      const Vec3 linear = momentum / mass;
+      Vec3 angular_momentum = Vec3::Zero();
+      Mat3 inertia = Mat3::Zero();
+      for (int v : zone) {
+        const Scalar m = 1 / inverse_mass[v];
+        const Vec3 r = start[v] - centre;
+        angular_momentum += m * r.cross(motion[v] - linear);
+        inertia += m * (r.squaredNorm() * Mat3::Identity() - r * r.transpose());
+      }
+      const Vec3 omega = inertia.completeOrthogonalDecomposition().solve(angular_momentum);
+      for (int v : zone) motion[v] = linear + omega.cross(start[v] - centre);
+    }
+  }
+};
+
+CollisionPipeline::CollisionPipeline(const Model& model, const CollisionSettings& settings)
+    : impl_(std::make_unique<Impl>(model, settings)) {}
+CollisionPipeline::~CollisionPipeline() = default;
+
+CollisionCounters CollisionPipeline::resolve(const std::vector<Vec3>& start, Scalar t, Scalar h, std::vector<Vec3>& motion) {
+  Impl& m = *impl_;
+  CollisionCounters counters;
+  const auto begin = Clock::now();
+  for (int v = 0; v < m.cloth_vertices; ++v) m.start[v] = start[v];
+  for (const auto& mo : m.obstacles) {
+    const auto now = posed_vertices(*mo.obstacle, t), next = posed_vertices(*mo.obstacle, t + h);
+    std::copy(now.begin(), now.end(), m.start.begin() + mo.first_vertex);
+    std::copy(next.begin(), next.end(), m.end.begin() + mo.first_vertex);
+  }
+  const Scalar separation = m.settings.separation_fraction * m.model.scene.collisions.thickness / h;
+
+  // Proximity repulsion on the first round's candidates, then CCD impulses until no collision.
+  ccd::Candidates first;
+  auto hits = m.detect(h, motion, counters, &first);
+  m.repel(first, h, motion, counters);
+  hits = m.detect(h, motion, counters);
+  for (int round = 0; !hits.empty() && round < m.settings.max_impulse_iterations; ++round) {
+    ++counters.impulse_iterations;
+    for (const auto& [contact, toc] : hits) m.impulse(contact, separation, h, motion);
+    hits = m.detect(h, motion, counters);
+  }
+  // Impact zones, growing until no collision is left.
+  Zones zones(int(m.start.size()));
+  for (int round = 0; !hits.empty() && round < m.settings.max_zone_iterations; ++round) {
+    for (const auto& [contact, toc] : hits)
+      for (int k = 1; k < 4; ++k) zones.join(contact.vertex[0], contact.vertex[k]);
+    m.apply_zones(zones, h, motion, counters);
+    hits = m.detect(h, motion, counters);
+  }
+  // The fail-safe: colliding cloth vertices keep their start positions; then all of them.
+  if (!hits.empty()) {
+    ++counters.fail_safes;
+    for (const auto& [contact, toc] : hits)
+      for (int v : contact.vertex)
+        if (v < m.cloth_vertices && m.inverse_mass[v] > 0) motion[v] = Vec3::Zero();
+    hits = m.detect(h, motion, counters);
+    if (!hits.empty())
+      for (int v = 0; v < m.cloth_vertices; ++v)
+        if (m.inverse_mass[v] > 0) motion[v] = Vec3::Zero();
+  }
+  counters.response_ms = ms_since(begin) - counters.ccd_ms;
+  return counters;
+}
+
+}  // namespace drape

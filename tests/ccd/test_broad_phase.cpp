@@ -1,0 +1,87 @@
+// The btDbvt broad phase and the candidate tests generated from triangle pairs.
+#include <gtest/gtest.h>
+
+#include <random>
+#include <set>
+
+#include "drape/ccd/broad_phase.h"
+
+using namespace drape;
+using namespace drape::ccd;
+
+namespace {
+
+bool overlap(const Aabb& a, const Aabb& b) {
+  return (a.min.array() <= b.max.array()).all() && (b.min.array() <= a.max.array()).all();
+}
+
+std::vector<Aabb> random_boxes(std::mt19937_64& rng, int count) {
+  std::uniform_real_distribution<Scalar> u(0, 1), size(0.01, 0.1);
+  std::vector<Aabb> boxes;
+  for (int i = 0; i < count; ++i) {
+    const Vec3 lo(u(rng), u(rng), u(rng));
+    boxes.push_back({lo, lo + Vec3(size(rng), size(rng), size(rng))});
+  }
+  return boxes;
+}
+
+}  // namespace
+
+TEST(BroadPhase, SelfPairsMatchBruteForceAcrossUpdates) {
+  std::mt19937_64 rng(8);
+  BoxTree tree;
+  for (int round = 0; round < 5; ++round) {
+    const auto boxes = random_boxes(rng, 300);  // same count: updated in place after round 0
+    tree.update(boxes);
+    std::vector<std::pair<std::int32_t, std::int32_t>> expected;
+    for (int i = 0; i < 300; ++i)
+      for (int j = i + 1; j < 300; ++j)
+        if (overlap(boxes[i], boxes[j])) expected.emplace_back(i, j);
+    EXPECT_EQ(tree.self_pairs(), expected) << "round " << round;
+  }
+}
+
+TEST(BroadPhase, PairsBetweenTwoTrees) {
+  std::mt19937_64 rng(9);
+  const auto a = random_boxes(rng, 200), b = random_boxes(rng, 150);
+  BoxTree ta, tb;
+  ta.update(a);
+  tb.update(b);
+  std::vector<std::pair<std::int32_t, std::int32_t>> expected;
+  for (int i = 0; i < 200; ++i)
+    for (int j = 0; j < 150; ++j)
+      if (overlap(a[i], b[j])) expected.emplace_back(i, j);
+  EXPECT_EQ(ta.pairs_with(tb), expected);
+}
+
+TEST(BroadPhase, SweptBoxCoversBothEndsAndTheMargin) {
+  const std::vector<Vec3> start{Vec3(0, 0, 0), Vec3(1, 0, 0), Vec3(0, 1, 0)};
+  const std::vector<Vec3> end{Vec3(0, 0, 2), Vec3(1, 0, 2), Vec3(0, 1, -1)};
+  const Aabb box = swept_box({0, 1, 2}, start, end, 0.1);
+  EXPECT_TRUE(box.min.isApprox(Vec3(-0.1, -0.1, -1.1)));
+  EXPECT_TRUE(box.max.isApprox(Vec3(1.1, 1.1, 2.1)));
+}
+
+TEST(FeaturePairs, FifteenTestsPerDisjointPairOnceEach) {
+  const std::vector<TriangleIndices> tris{{0, 1, 2}, {3, 4, 5}};
+  const std::vector<std::pair<std::int32_t, std::int32_t>> pairs{{0, 1}, {0, 1}};  // twice: counted once
+  const Candidates c = feature_pairs(tris, tris, pairs);
+  EXPECT_EQ(c.vertex_face.size(), 6u);
+  EXPECT_EQ(c.edge_edge.size(), 9u);
+}
+
+TEST(FeaturePairs, FeaturesSharingAVertexAreSkippedAndSharedEdgesTestedOnce) {
+  // Two triangles sharing edge (1, 2): vertex 0 vs face (1,2,3) and 3 vs (0,1,2) remain; of
+  // the 9 edge pairs only those with no common vertex remain: (0,1)-(2,3) and (0,2)-(1,3).
+  const std::vector<TriangleIndices> tris{{0, 1, 2}, {1, 3, 2}, {2, 3, 4}};
+  const Candidates c = feature_pairs(tris, tris, std::vector<std::pair<std::int32_t, std::int32_t>>{{0, 1}});
+  EXPECT_EQ(c.vertex_face.size(), 2u);
+  EXPECT_EQ(c.edge_edge.size(), 2u);
+  for (const auto& p : c.vertex_face)
+    for (auto f : p.face) EXPECT_NE(p.vertex, f);
+  // A fan of triangles around vertex 2: the same edge pair from two triangle pairs, once.
+  const Candidates fan = feature_pairs(tris, tris, std::vector<std::pair<std::int32_t, std::int32_t>>{{0, 1}, {0, 2}, {1, 2}});
+  std::set<std::array<std::int32_t, 4>> unique;
+  for (const auto& p : fan.edge_edge) unique.insert({p.edge_a[0], p.edge_a[1], p.edge_b[0], p.edge_b[1]});
+  EXPECT_EQ(unique.size(), fan.edge_edge.size());
+}
