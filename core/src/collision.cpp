@@ -73,6 +73,7 @@ struct CollisionPipeline::Impl {
   std::vector<Vec3> start, end;      // combined positions at t and t + h
   std::vector<ccd::Aabb> boxes;
   ccd::Options options;
+  CollisionPipeline::Observer observer;
 
   explicit Impl(const Model& m, const CollisionSettings& s) : model(m), settings(s) {
     cloth_vertices = int(m.vertex_count());
@@ -131,17 +132,24 @@ struct CollisionPipeline::Impl {
     return v < cloth_vertices ? motion[v] : Vec3((end[v] - start[v]) / h);
   }
 
-  // Applies the impulse that brings the contact's normal relative velocity up to target.
+  // Applies the impulse that brings the contact's normal relative velocity up to target, and
+  // Coulomb friction: the relative tangential velocity shrinks by friction times the normal
+  // velocity change, never reversing (Bridson, Fedkiw and Anderson 2002, section 7.2).
   bool impulse(const Contact& c, Scalar target, Scalar h, std::vector<Vec3>& motion) const {
-    Scalar normal_speed = 0, denominator = 0;
+    Vec3 relative = Vec3::Zero();
+    Scalar denominator = 0;
     for (int k = 0; k < 4; ++k) {
-      normal_speed += c.weight[k] * velocity(c.vertex[k], h, motion).dot(c.normal);
+      relative += c.weight[k] * velocity(c.vertex[k], h, motion);
       denominator += c.weight[k] * c.weight[k] * inverse_mass[c.vertex[k]];
     }
+    const Scalar normal_speed = relative.dot(c.normal);
     if (normal_speed >= target || !(denominator > 0)) return false;
-    const Scalar magnitude = (target - normal_speed) / denominator;
+    const Vec3 tangential = relative - normal_speed * c.normal;
+    const Scalar slide = tangential.norm();
+    Vec3 change = (target - normal_speed) * c.normal;  // wanted change of the relative velocity
+    if (slide > 0) change -= std::min(model.scene.friction * (target - normal_speed), slide) * tangential / slide;
     for (int k = 0; k < 4; ++k)
-      if (c.vertex[k] < cloth_vertices) motion[c.vertex[k]] += c.weight[k] * inverse_mass[c.vertex[k]] * magnitude * c.normal;
+      if (c.vertex[k] < cloth_vertices) motion[c.vertex[k]] += c.weight[k] * inverse_mass[c.vertex[k]] / denominator * change;
     return true;
   }
 
@@ -191,8 +199,10 @@ struct CollisionPipeline::Impl {
                                                  ccd::Candidates* keep = nullptr) {
     const auto begin = Clock::now();
     set_end(h, motion);
+    const long pairs_before = counters.bvh_pairs;
     ccd::Candidates c = candidates(model.scene.collisions.thickness, counters);
     const ccd::BatchInput input{start, end, c.vertex_face, c.edge_edge};
+    if (observer && keep) observer(input, counters.bvh_pairs - pairs_before);
     const ccd::BatchOutput out = ccd::run_batch(input, options, settings.threads);
     counters.tests += out.counters;
     counters.vf_tests += long(c.vertex_face.size());
@@ -288,6 +298,10 @@ struct CollisionPipeline::Impl {
 CollisionPipeline::CollisionPipeline(const Model& model, const CollisionSettings& settings)
     : impl_(std::make_unique<Impl>(model, settings)) {}
 CollisionPipeline::~CollisionPipeline() = default;
+
+void CollisionPipeline::set_observer(Observer observer) {
+  impl_->observer = std::move(observer);
+}
 
 CollisionCounters CollisionPipeline::resolve(const std::vector<Vec3>& start, Scalar t, Scalar h, std::vector<Vec3>& motion) {
   Impl& m = *impl_;

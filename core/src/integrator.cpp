@@ -50,6 +50,8 @@ Integrator::Integrator(const Model& model, std::unique_ptr<LinearSolver> solver,
   if (CollisionPipeline::needed(model)) {
     CollisionSettings settings;
     settings.threads = threads;
+    settings.max_impulse_iterations = model.scene.collisions.max_impulse_iterations;
+    settings.max_zone_iterations = model.scene.collisions.max_zone_iterations;
     collisions_ = std::make_unique<CollisionPipeline>(model, settings);
   }
   Workspace& w = *work_;

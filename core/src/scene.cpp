@@ -336,12 +336,14 @@ Scene parse_scene(const std::string& text, const std::filesystem::path& file) {
   }
   if (n.has("collisions")) {
     const Node c = n.at("collisions");
-    c.allow({"self", "obstacles", "thickness", "method"});
+    c.allow({"self", "obstacles", "thickness", "method", "max_impulse_iterations", "max_zone_iterations"});
     if (c.has("self")) s.collisions.self = c.at("self").boolean();
     if (c.has("obstacles")) s.collisions.obstacles = c.at("obstacles").boolean();
     if (c.has("thickness")) s.collisions.thickness = c.at("thickness").non_negative();
     if (c.has("method"))
       s.collisions.method = *ccd::parse_method(c.at("method").one_of({"cubic", "dnf", "vincent", "conservative"}));
+    if (c.has("max_impulse_iterations")) s.collisions.max_impulse_iterations = c.at("max_impulse_iterations").integer_in(0, 1000);
+    if (c.has("max_zone_iterations")) s.collisions.max_zone_iterations = c.at("max_zone_iterations").integer_in(0, 1000);
   }
   if (n.has("output")) {
     const Node o = n.at("output");

@@ -11,6 +11,7 @@
 ///   iterated -> rigid impact zones -> the fail-safe (colliding vertices keep their start
 ///   positions, then all cloth vertices do).
 
+#include <functional>
 #include <memory>
 
 #include "drape/ccd/batch.h"
@@ -58,6 +59,12 @@ class CollisionPipeline {
   /// Whether the scene needs the pipeline at all (self-collision on, or mesh obstacles with
   /// obstacle collisions on): a scene pays only for what it asks for.
   static bool needed(const Model& model);
+
+  /// Called with the first detection round's elementary tests of every resolve and the count
+  /// of overlapping triangle pairs they came from (the benchmarks measure each CCD method on
+  /// exactly these).
+  using Observer = std::function<void(const ccd::BatchInput&, long triangle_pairs)>;
+  void set_observer(Observer observer);
 
  private:
   struct Impl;

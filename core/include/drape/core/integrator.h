@@ -46,6 +46,8 @@ class Integrator {
   /// collision pipeline (broad phase, narrow phase, response) -> positions -> checks.
   StepReport step(State& state);
   const LinearSolver& solver() const { return *solver_; }
+  /// The collision pipeline, or nullptr when the scene needs none.
+  CollisionPipeline* collisions() { return collisions_.get(); }
 
  private:
   struct Workspace;

@@ -123,6 +123,8 @@ struct CollisionSpec {
   bool obstacles = true;
   Scalar thickness = 0.005;  ///< m: the gap kept between cloth and anything it touches
   ccd::Method method = ccd::Method::Vincent;
+  int max_impulse_iterations = 8;  ///< CCD-impulse rounds per step before impact zones
+  int max_zone_iterations = 16;    ///< impact-zone rounds per step before the fail-safe
 };
 
 struct OutputSpec {
