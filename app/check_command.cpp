@@ -6,45 +6,23 @@
 #include "drape/core/mesh_io.h"
 #include "drape/core/penetration.h"
 #include "drape/core/run.h"
+#include "run_folder.h"
 
 namespace drape::app {
 namespace {
 
 namespace fs = std::filesystem;
 
-// The run's scene: its copy, read as if from where it came so that mesh paths resolve.
-Scene run_scene(const fs::path& folder) {
-  const fs::path copy = folder / "scene.json";
-  if (!fs::exists(copy)) throw SceneError(copy.string() + ": not found: is this a drape run folder?");
-  std::ifstream in(copy);
-  std::stringstream text;
-  text << in.rdbuf();
-  fs::path origin = copy;
-  if (std::ifstream where{folder / "scene_path.txt"}; where) {
-    std::string line;
-    std::getline(where, line);
-    if (!line.empty()) origin = line;
-  }
-  return parse_scene(text.str(), origin);
-}
-
 int check(const std::string& folder_name, std::size_t max_pairs) {
   const fs::path folder(folder_name);
   Model model;
   try {
-    model = build_model(run_scene(folder));
+    model = build_model(run_folder_scene(folder));
   } catch (const SceneError& e) {
     std::cerr << "drape check: " << e.what() << "\n";
     return EXIT_BAD_INPUT;
   }
-  std::vector<std::pair<int, fs::path>> frames;
-  const std::regex name(R"(frame_(\d+)\.\w+)");
-  for (const auto& entry : fs::directory_iterator(folder)) {
-    std::smatch match;
-    const std::string file = entry.path().filename().string();
-    if (std::regex_match(file, match, name)) frames.emplace_back(std::stoi(match[1]), entry.path());
-  }
-  std::sort(frames.begin(), frames.end());
+  const auto frames = run_folder_frames(folder);
   if (frames.empty()) {
     std::cerr << "drape check: " << folder.string() << ": no frame_*.* meshes\n";
     return EXIT_BAD_INPUT;

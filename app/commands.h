@@ -4,7 +4,9 @@
 /// returns the function that runs it; the function returns the process exit status.
 
 #include <CLI/CLI.hpp>
+#include <filesystem>
 #include <functional>
+#include <string>
 
 namespace drape::app {
 
@@ -21,5 +23,17 @@ Command add_run_command(CLI::App& app);
 Command add_validate_command(CLI::App& app);
 Command add_check_stats_command(CLI::App& app);
 Command add_check_command(CLI::App& app);
+Command add_render_command(CLI::App& app);
+
+/// Options of a render, from drape render or drape run --render.
+struct RenderOptions {
+  int width = 0, height = 0;  ///< 0: the scene's
+  bool video = true;
+  bool quiet = false;
+};
+/// Renders a run folder's saved frames; returns the exit status.
+int render_run(const std::filesystem::path& folder, const RenderOptions& options);
+/// Parses WIDTHxHEIGHT into options; false when malformed or out of range.
+bool parse_resolution(const std::string& text, RenderOptions& options);
 
 }  // namespace drape::app

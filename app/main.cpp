@@ -19,6 +19,7 @@ int main(int argc, char** argv) {
       "  drape run scenes/drape_sphere.json             simulate; frames and stats.csv in out/drape_sphere\n"
       "  drape validate scenes/flag.json                check a scene without running it\n"
       "  drape check out/drape_sphere                   look for intersecting triangles in a run\n"
+      "  drape render out/drape_sphere                  PNG frames and an MP4 of a finished run\n"
       "  drape check-stats out/flag/stats.csv golden.csv compare frame statistics\n"
       "  drape ccd tests/data/ccd-queries               compare the CCD methods on ground truth");
 
@@ -26,6 +27,7 @@ int main(int argc, char** argv) {
   commands["run"] = drape::app::add_run_command(app);
   commands["validate"] = drape::app::add_validate_command(app);
   commands["check"] = drape::app::add_check_command(app);
+  commands["render"] = drape::app::add_render_command(app);
   commands["check-stats"] = drape::app::add_check_stats_command(app);
   commands["ccd"] = drape::app::add_ccd_command(app);
 

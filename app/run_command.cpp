@@ -8,6 +8,7 @@
 
 #include "commands.h"
 #include "drape/core/run.h"
+#include "drape/render/renderer.h"
 
 namespace drape::app {
 namespace {
@@ -60,6 +61,8 @@ struct RunArguments {
   int threads = 1;
   bool check = false;
   std::string method;
+  bool render = false;
+  std::string resolution;
 };
 
 // Loads and builds; prints the error and returns nullopt on bad input.
@@ -78,6 +81,15 @@ int run(const RunArguments& args) {
   std::optional<Model> model = load_model(args.scene, "run", args.method);
   if (!model) return EXIT_BAD_INPUT;
   const Scene& scene = model->scene;
+  // The scene's render section may ask for frames even without --render; it is checked now,
+  // before simulating, so a bad render section costs no run.
+  bool wants_render = false;
+  try {
+    wants_render = render::parse_render_settings(scene).enabled;
+  } catch (const render::RenderError& e) {
+    std::cerr << "drape run: " << e.what() << "\n";
+    return EXIT_BAD_INPUT;
+  }
   RunSettings settings;
   settings.out = args.out.empty() ? scene.output.folder : std::filesystem::path(args.out);
   settings.frames = args.frames > 0 ? args.frames : scene.frames;
@@ -102,12 +114,22 @@ int run(const RunArguments& args) {
   }
   if (outcome.end != RunEnd::Completed) {
     progress.end_line();
+    if (args.render || wants_render) std::cerr << "drape run: not rendering a run that stopped; 'drape render' can\n";
     std::cerr << "drape run: stopped: " << outcome.message << " (in " << settings.out.string() << "/)\n";
     return EXIT_RUN_STOPPED;
   }
   if (!args.quiet)
     std::cerr << "drape run: done: " << outcome.frames_done << " frames; meshes and stats.csv in " << settings.out.string()
               << "/\n";
+  if (args.render || wants_render) {
+    RenderOptions options;
+    options.quiet = args.quiet;
+    if (!args.resolution.empty() && !parse_resolution(args.resolution, options)) {
+      std::cerr << "drape run: --resolution: expected WIDTHxHEIGHT from 16x16 to 8192x8192\n";
+      return EXIT_BAD_INPUT;
+    }
+    return render_run(settings.out, options);
+  }
   return EXIT_OK;
 }
 
@@ -122,6 +144,7 @@ Command add_run_command(CLI::App& app) {
       "  stats.csv            one row per frame: timings, solver iterations, energies, stretch,\n"
       "                       distance to the obstacles\n"
       "  scene.json           a copy of the scene\n"
+      "  render/*.png, video.mp4  with --render (or the scene's render.enabled)\n"
       "A run that has to stop (solver failure, NaN, the cloth leaving the scene bounds, Ctrl-C)\n"
       "says which frame and why, exits with status 3 and keeps every frame written so far.\n\n"
       "Examples:\n"
@@ -136,6 +159,8 @@ Command add_run_command(CLI::App& app) {
       ->capture_default_str();
   cmd->add_option("--ccd", args->method, "CCD method, overriding the scene's collisions.method")
       ->check(CLI::IsMember({"cubic", "dnf", "vincent", "conservative"}));
+  cmd->add_flag("--render", args->render, "Then render PNG frames and an MP4 video (see 'drape render --help')");
+  cmd->add_option("--resolution", args->resolution, "With --render: WIDTHxHEIGHT, overriding the scene's");
   cmd->add_flag("--check", args->check, "Run the independent penetration check on every frame (column penetrations)");
   return [args] { return run(*args); };
 }

@@ -13,10 +13,10 @@ for method in vincent conservative; do
   for scene in scenes/*.json; do
     name=$(basename "$scene" .json)
     out="$OUT/$name-$method"
-    start=$(date +%s.%N)
+    start=$(date +%s%N)
     "$DRAPE" run "$scene" --ccd "$method" --check --quiet --out "$out"
     status=$?
-    seconds=$(echo "$(date +%s.%N) - $start" | bc)
+    seconds=$(awk -v a="$start" -v b="$(date +%s%N)" 'BEGIN { printf "%.1f", (b - a) / 1e9 }')
     frames=$(($(wc -l < "$out/stats.csv") - 1))
     verdict=$("$DRAPE" check "$out" | tail -1)
     printf "%-14s %-13s %9.1f %8d %s (run status %d)\n" "$name" "$method" "$seconds" "$frames" "$verdict" "$status"

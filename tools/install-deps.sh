@@ -18,6 +18,7 @@ PACKAGES=(
   libsuitesparse-dev   # CHOLMOD sparse Cholesky
   libopenblas0-serial  # BLAS for CHOLMOD's supernodal factorisation (2x the reference BLAS; serial = deterministic)
   libosmesa6-dev       # off-screen rendering
+  libpng-dev           # PNG frames
   ffmpeg               # MP4 encoding
 )
 

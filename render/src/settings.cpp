@@ -1,0 +1,115 @@
+#include <nlohmann/json.hpp>
+
+#include <cmath>
+
+#include "drape/render/renderer.h"
+
+namespace drape::render {
+namespace {
+
+using json = nlohmann::json;
+
+// Limits of a sane request: beyond them the renderer would need gigabytes.
+constexpr int MIN_SIZE = 16, MAX_SIZE = 8192;
+constexpr int MAX_SAMPLES = 4;
+constexpr double MAX_SUPERSAMPLED_PIXELS = 64e6;
+
+[[noreturn]] void fail(const Scene& scene, const std::string& path, const std::string& what) {
+  throw RenderError(scene.file.string() + ": /render" + path + ": " + what);
+}
+
+double number(const Scene& scene, const json& v, const std::string& path) {
+  if (!v.is_number()) fail(scene, path, "expected a number, found " + v.dump());
+  return v.get<double>();
+}
+
+Vec3 vec3(const Scene& scene, const json& v, const std::string& path) {
+  if (!v.is_array() || v.size() != 3) fail(scene, path, "expected an array of 3 numbers, found " + v.dump());
+  return Vec3(number(scene, v[0], path + "/0"), number(scene, v[1], path + "/1"), number(scene, v[2], path + "/2"));
+}
+
+}  // namespace
+
+RenderSettings parse_render_settings(const Scene& scene) {
+  RenderSettings s;
+  if (scene.render_json.empty()) return s;
+  const json r = json::parse(scene.render_json);
+  for (const auto& [key, value] : r.items())
+    if (key != "camera" && key != "resolution" && key != "fps" && key != "samples" && key != "enabled" && key != "comment")
+      fail(scene, "/" + key, "unknown key (expected one of: camera, resolution, fps, samples, enabled)");
+  if (r.contains("resolution")) {
+    const json& v = r["resolution"];
+    if (!v.is_array() || v.size() != 2 || !v[0].is_number_integer() || !v[1].is_number_integer())
+      fail(scene, "/resolution", "expected [width, height] in pixels, found " + v.dump());
+    s.width = v[0].get<int>();
+    s.height = v[1].get<int>();
+    if (s.width < MIN_SIZE || s.height < MIN_SIZE || s.width > MAX_SIZE || s.height > MAX_SIZE)
+      fail(scene, "/resolution", "expected each side from 16 to 8192 pixels, found " + v.dump());
+  }
+  if (r.contains("samples")) {
+    const json& v = r["samples"];
+    if (!v.is_number_integer() || v.get<int>() < 1 || v.get<int>() > MAX_SAMPLES)
+      fail(scene, "/samples", "expected an integer from 1 to 4 (supersampling per axis), found " + v.dump());
+    s.samples = v.get<int>();
+  }
+  if (double(s.width) * s.height * s.samples * s.samples > MAX_SUPERSAMPLED_PIXELS)
+    fail(scene, "/resolution", "resolution times samples squared exceeds 64 million pixels; lower one of them");
+  if (r.contains("fps")) {
+    s.fps = number(scene, r["fps"], "/fps");
+    if (!(s.fps > 0 && s.fps <= 240)) fail(scene, "/fps", "expected a frame rate from 0 to 240");
+  }
+  if (r.contains("enabled")) {
+    if (!r["enabled"].is_boolean()) fail(scene, "/enabled", "expected true or false");
+    s.enabled = r["enabled"].get<bool>();
+  }
+  if (r.contains("camera")) {
+    const json& c = r["camera"];
+    if (!c.is_object()) fail(scene, "/camera", "expected an object");
+    Camera camera;
+    for (const auto& [key, value] : c.items())
+      if (key != "position" && key != "target" && key != "up" && key != "fov" && key != "comment")
+        fail(scene, "/camera/" + key, "unknown key (expected one of: position, target, up, fov)");
+    if (c.contains("position")) camera.position = vec3(scene, c["position"], "/camera/position");
+    if (c.contains("target")) camera.target = vec3(scene, c["target"], "/camera/target");
+    if (c.contains("up")) camera.up = vec3(scene, c["up"], "/camera/up");
+    if (c.contains("fov")) {
+      camera.fov_degrees = number(scene, c["fov"], "/camera/fov");
+      if (!(camera.fov_degrees > 1 && camera.fov_degrees < 170)) fail(scene, "/camera/fov", "expected degrees from 1 to 170");
+    }
+    if (!((camera.target - camera.position).norm() > 0)) fail(scene, "/camera", "position and target must differ");
+    if (!(camera.up.cross(camera.target - camera.position).norm() > 0)) fail(scene, "/camera/up", "must not be along the view direction");
+    s.camera = camera;
+  }
+  return s;
+}
+
+Camera frame_scene(const Model& model, Scalar aspect) {
+  // The box around the cloth and the spheres and meshes (planes are unbounded), seen from the
+  // front-left, above, far enough for the box's bounding sphere to fill the narrower view.
+  Vec3 lo = model.initial_positions[0], hi = lo;
+  const auto include = [&](const Vec3& p) { lo = lo.cwiseMin(p), hi = hi.cwiseMax(p); };
+  for (const Vec3& p : model.initial_positions) include(p);
+  for (const Obstacle& o : model.obstacles) {
+    if (o.spec.kind == ObstacleSpec::Kind::Sphere) {
+      include(o.spec.center - Vec3::Constant(o.spec.radius));
+      include(o.spec.center + Vec3::Constant(o.spec.radius));
+    }
+    for (const Vec3& p : o.mesh.vertices) include(p);
+  }
+  Camera c;
+  c.up = -model.scene.gravity.norm() > 0 ? Vec3(-model.scene.gravity.normalized()) : Vec3::UnitZ();
+  if (!(c.up.norm() > 0)) c.up = Vec3::UnitZ();
+  c.target = 0.5 * (lo + hi);
+  const Scalar radius = std::max<Scalar>(0.5 * (hi - lo).norm(), 1e-3);
+  const Scalar half_fov = c.fov_degrees * M_PI / 360.0;
+  const Scalar fit = std::min(std::tan(half_fov), std::tan(half_fov) * aspect);
+  const Scalar distance = 0.95 * radius / fit;
+  // From the front left, 18 degrees above the horizon (the horizon just in view).
+  const Vec3 side = c.up.unitOrthogonal(), front = c.up.cross(side);
+  const Scalar elevation = 18 * M_PI / 180;
+  const Vec3 horizontal = (-0.8 * front - 0.6 * side).normalized();
+  c.position = c.target + distance * (std::cos(elevation) * horizontal + std::sin(elevation) * c.up);
+  return c;
+}
+
+}  // namespace drape::render

@@ -1,0 +1,118 @@
+// Off-screen rendering: what a frame shows, the video's format, and that simulating alone
+// never creates a GL context.
+#include <gtest/gtest.h>
+
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <iterator>
+
+#include "../app/drape_process.h"
+#include "drape/render/renderer.h"
+
+using namespace drape;
+using drape::testing::run_drape;
+namespace fs = std::filesystem;
+
+namespace {
+
+const std::string SOURCE = DRAPE_SOURCE_DIR;
+
+fs::path temp_dir(const std::string& name) {
+  const fs::path dir = fs::temp_directory_path() / ("drape_render_test_" + std::to_string(::getpid())) / name;
+  fs::remove_all(dir);
+  fs::create_directories(dir.parent_path());
+  return dir;
+}
+
+std::string shell(const std::string& command) {
+  std::string out;
+  FILE* pipe = popen(command.c_str(), "r");
+  char buffer[256];
+  while (std::fgets(buffer, sizeof buffer, pipe)) out += buffer;
+  pclose(pipe);
+  return out;
+}
+
+}  // namespace
+
+TEST(Render, AFrameShowsTheClothOnTheBackground) {
+  const Model model = build_model(load_scene(SOURCE + "/scenes/hanging.json"));
+  const auto renderer = render::make_renderer(320, 180, 2);
+  const render::Camera camera = render::frame_scene(model, 320.0 / 180);
+  const render::Image image = renderer->render(model, model.initial_positions, 0, camera);
+  ASSERT_EQ(image.rgb.size(), 320u * 180 * 3);
+  int cloth = 0, background = 0;
+  for (std::size_t p = 0; p < image.rgb.size(); p += 3) {
+    const int r = image.rgb[p], g = image.rgb[p + 1], b = image.rgb[p + 2];
+    if ((r > 120 && g < 110 && b < 110) || (r > 150 && g > 110 && b < 110)) ++cloth;  // front red, back yellow
+    if (r > 225 && g > 230 && b > 235) ++background;
+  }
+  const double total = 320.0 * 180;
+  EXPECT_GT(cloth / total, 0.03);
+  EXPECT_LT(cloth / total, 0.7);
+  EXPECT_GT(background / total, 0.25);
+  EXPECT_LT((cloth + background) / total, 1.0001);
+}
+
+TEST(Render, RunWithRenderWritesPngsAndAnH264Video) {
+  const fs::path out = temp_dir("hanging");
+  const auto run = run_drape("run " + SOURCE + "/scenes/hanging.json --frames 5 --quiet --render --resolution 160x96 --out " + out.string());
+  ASSERT_EQ(run.status, 0) << run.output;
+  for (int f = 0; f <= 5; ++f) EXPECT_TRUE(fs::exists(out / "render" / ("frame_0000" + std::to_string(f) + ".png")));
+  ASSERT_TRUE(fs::exists(out / "video.mp4"));
+  const std::string probe = shell("ffprobe -v error -count_frames -select_streams v:0 -show_entries "
+                                  "stream=codec_name,width,height,pix_fmt,nb_read_frames -of csv=p=0 " + (out / "video.mp4").string());
+  EXPECT_EQ(probe, "h264,160,96,yuv420p,6\n");
+}
+
+TEST(Render, SimulatingAloneNeverCreatesAGlContext) {
+  // DRAPE_NO_GL makes any attempt at a GL context fail: the plain run must not notice it,
+  // the rendering run must.
+  const fs::path plain = temp_dir("no_gl_plain"), rendered = temp_dir("no_gl_render");
+  const std::string scene = SOURCE + "/scenes/hanging.json --frames 2 --quiet --out ";
+  EXPECT_EQ(run_drape("run " + scene + plain.string()).status, 0);
+  EXPECT_FALSE(fs::exists(plain / "render"));
+  ::setenv("DRAPE_NO_GL", "1", 1);
+  const auto blocked = run_drape("run " + scene + rendered.string() + " --render");
+  const auto plain_again = run_drape("run " + scene + plain.string());
+  ::unsetenv("DRAPE_NO_GL");
+  EXPECT_EQ(plain_again.status, 0) << plain_again.output;
+  EXPECT_NE(blocked.status, 0);
+  EXPECT_NE(blocked.output.find("no GL context"), std::string::npos) << blocked.output;
+  EXPECT_TRUE(fs::exists(rendered / "stats.csv"));  // a failed render leaves the simulation output
+  std::ifstream stats(rendered / "stats.csv");
+  EXPECT_EQ(std::count(std::istreambuf_iterator<char>(stats), std::istreambuf_iterator<char>(), '\n'), 4);
+}
+
+TEST(Render, BadRenderInputIsReportedNotCrashed) {
+  const fs::path dir = temp_dir("bad");
+  fs::create_directories(dir);
+  const fs::path scene = dir / "zero.json";
+  std::ofstream(scene) << R"({"cloths": [{"grid": {}}], "render": {"resolution": [0, 720]}})";
+  const auto zero = run_drape("run " + scene.string() + " --frames 1 --quiet --out " + (dir / "zero_out").string());
+  EXPECT_EQ(zero.status, 2);
+  EXPECT_NE(zero.output.find("/render/resolution: expected each side from 16 to 8192"), std::string::npos) << zero.output;
+  std::ofstream(dir / "huge.json") << R"({"cloths": [{"grid": {}}], "render": {"resolution": [8192, 8192], "samples": 4}})";
+  EXPECT_EQ(run_drape("validate " + (dir / "huge.json").string()).status, 0);  // validate checks the simulation part
+  EXPECT_EQ(run_drape("run " + (dir / "huge.json").string() + " --frames 1 --quiet --out " + (dir / "huge_out").string()).status, 2);
+  EXPECT_EQ(run_drape("render " + (dir / "zero_out").string() + " --resolution 5x5").status, 2);
+  // A run folder whose render/ cannot be created: a file stands in its way.
+  const fs::path out = dir / "blocked";
+  ASSERT_EQ(run_drape("run " + SOURCE + "/scenes/hanging.json --frames 1 --quiet --out " + out.string()).status, 0);
+  std::ofstream(out / "render") << "in the way";
+  const auto blocked = run_drape("render " + out.string());
+  EXPECT_EQ(blocked.status, 2);
+  EXPECT_NE(blocked.output.find("cannot create the folder"), std::string::npos) << blocked.output;
+  EXPECT_TRUE(fs::exists(out / "stats.csv"));
+}
+
+TEST(Render, WithoutFfmpegItWarnsAndKeepsThePngs) {
+  const fs::path out = temp_dir("no_ffmpeg");
+  ASSERT_EQ(run_drape("run " + SOURCE + "/scenes/hanging.json --frames 2 --quiet --out " + out.string()).status, 0);
+  const auto run = run_drape("render " + out.string() + " --resolution 64x48 2>&1 | cat; PATH=/nonexistent " DRAPE_EXECUTABLE
+                             " render " + out.string() + " --resolution 64x48");
+  EXPECT_EQ(run.status, 0) << run.output;
+  EXPECT_NE(run.output.find("ffmpeg program is not on the PATH"), std::string::npos) << run.output;
+  EXPECT_TRUE(fs::exists(out / "render" / "frame_00002.png"));
+}
