@@ -5,6 +5,7 @@
 
 #include <array>
 #include <cstdio>
+#include <filesystem>
 #include <string>
 
 namespace drape::testing {
@@ -23,6 +24,15 @@ inline Outcome run_drape(const std::string& arguments) {
   const int status = pclose(pipe);
   run.status = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
   return run;
+}
+
+/// A fresh path name under the system's temporary folder, unique to this test process
+/// (suite names the test file); its parent exists, the path itself does not.
+inline std::filesystem::path fresh_temp_path(const std::string& suite, const std::string& name) {
+  const auto dir = std::filesystem::temp_directory_path() / ("drape_" + suite + "_" + std::to_string(::getpid())) / name;
+  std::filesystem::remove_all(dir);
+  std::filesystem::create_directories(dir.parent_path());
+  return dir;
 }
 
 }  // namespace drape::testing

@@ -18,12 +18,7 @@ namespace {
 
 const std::string SOURCE = DRAPE_SOURCE_DIR;
 
-fs::path temp_dir(const std::string& name) {
-  const fs::path dir = fs::temp_directory_path() / ("drape_render_test_" + std::to_string(::getpid())) / name;
-  fs::remove_all(dir);
-  fs::create_directories(dir.parent_path());
-  return dir;
-}
+fs::path temp_dir(const std::string& name) { return drape::testing::fresh_temp_path("render_test", name); }
 
 std::string shell(const std::string& command) {
   std::string out;
