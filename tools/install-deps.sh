@@ -20,6 +20,7 @@ PACKAGES=(
   libosmesa6-dev       # off-screen rendering
   libpng-dev           # PNG frames
   ffmpeg               # MP4 encoding
+  clang libclang-rt-14-dev  # libFuzzer targets (tools/fuzz.sh)
 )
 
 missing=()

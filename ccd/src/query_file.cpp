@@ -72,8 +72,17 @@ QueryFile read_query_file(const std::filesystem::path& path, std::optional<Query
 
   std::ifstream in(path);
   if (!in) fail(path, 0, "cannot open the file for reading");
+  std::stringstream text;
+  text << in.rdbuf();
+  return parse_query_text(text.str(), path, file.kind);
+}
 
+QueryFile parse_query_text(const std::string& text, const std::filesystem::path& path, QueryKind kind) {
+  QueryFile file;
+  file.path = path;
+  file.kind = kind;
   std::vector<std::string> lines;
+  std::stringstream in(text);
   for (std::string line; std::getline(in, line);) lines.push_back(trim(line));
   while (!lines.empty() && lines.back().empty()) lines.pop_back();  // trailing blank lines
   if (lines.empty()) fail(path, 1, "the file is empty; expected 8 rows per query");

@@ -41,6 +41,10 @@ namespace {
 
 using json = nlohmann::json;
 
+// Bounds that keep counts in an int and a run finite.
+constexpr int MAX_FRAME_STEPS = 100000;
+constexpr int MAX_FRAMES = 10000000;
+
 std::string describe(const json& value) {
   std::string text = value.dump();
   if (text.size() > 40) text = text.substr(0, 37) + "...";
@@ -299,18 +303,24 @@ Scene parse_scene(const std::string& text, const std::filesystem::path& file) {
   if (n.has("comment")) s.comment = n.at("comment").string();
   if (n.has("frame_time")) s.frame_time = n.at("frame_time").positive();
   if (n.has("frame_steps") && n.has("timestep")) n.fail("give 'frame_steps' or 'timestep', not both");
-  if (n.has("frame_steps")) s.frame_steps = n.at("frame_steps").integer_in(1, 100000);
+  if (n.has("frame_steps")) s.frame_steps = n.at("frame_steps").integer_in(1, MAX_FRAME_STEPS);
   if (n.has("timestep")) {
     const Node t = n.at("timestep");
     const Scalar h = t.positive();
     const Scalar steps = s.frame_time / h;
+    if (!(steps <= MAX_FRAME_STEPS))
+      t.fail("expected at most " + std::to_string(MAX_FRAME_STEPS) + " steps per frame (frame_time / timestep)");
     if (std::abs(steps - std::round(steps)) > 1e-6 * steps || std::round(steps) < 1)
       t.fail("expected a timestep that divides frame_time (" + std::to_string(s.frame_time) + ") evenly");
     s.frame_steps = int(std::round(steps));
   }
   if (n.has("frames") && n.has("end_time")) n.fail("give 'frames' or 'end_time', not both");
-  if (n.has("frames")) s.frames = n.at("frames").integer_in(1, 10000000);
-  if (n.has("end_time")) s.frames = std::max(1, int(std::ceil(n.at("end_time").positive() / s.frame_time - 1e-9)));
+  if (n.has("frames")) s.frames = n.at("frames").integer_in(1, MAX_FRAMES);
+  if (n.has("end_time")) {
+    const Scalar frames = std::ceil(n.at("end_time").positive() / s.frame_time - 1e-9);
+    if (!(frames <= MAX_FRAMES)) n.at("end_time").fail("expected at most " + std::to_string(MAX_FRAMES) + " frames (end_time / frame_time)");
+    s.frames = std::max(1, int(frames));
+  }
   if (n.has("gravity")) s.gravity = n.at("gravity").vec3();
   for (const Node& c : n.at("cloths").array(1)) s.cloths.push_back(read_cloth(c));
   if (n.has("handles"))

@@ -90,6 +90,8 @@ TEST(Scene, BadInputNamesTheFileThePathAndWhatWasExpected) {
       {R"({"cloths": [{"grid": {}}], "solver": {"type": "lu"}})", "/solver/type: expected one of 'cholmod', 'cg'"},
       {R"({"cloths": [{"grid": {}}], "collisions": {"method": "quartic"}})", "/collisions/method: expected one of"},
       {R"({"cloths": [{"grid": {}}], "timestep": 0.007})", "/timestep: expected a timestep that divides frame_time"},
+      {R"({"cloths": [{"grid": {}}], "timestep": 1e-300})", "/timestep: expected at most 100000 steps per frame"},
+      {R"({"cloths": [{"grid": {}}], "end_time": 1e300})", "/end_time: expected at most 10000000 frames"},
       {R"({"cloths": [{"grid": {}}], "obstacles": [{"sphere": {"center": [0, 0, 0], "radius": 0}}]})",
        "/obstacles/0/sphere/radius: expected a number > 0"},
       {R"({"cloths": [{"grid": {}}], "obstacles": [{"plane": {"normal": [0, 0, 0]}}]})", "/obstacles/0/plane/normal: the normal must not be zero"},

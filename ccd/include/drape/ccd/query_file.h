@@ -34,4 +34,7 @@ std::optional<QueryKind> kind_from_path(const std::filesystem::path& path);
 /// files hold only exactly representable values). Throws QueryFileError.
 QueryFile read_query_file(const std::filesystem::path& path, std::optional<QueryKind> kind_override = std::nullopt);
 
+/// The same from the file's text; path names it in messages. Throws QueryFileError.
+QueryFile parse_query_text(const std::string& text, const std::filesystem::path& path, QueryKind kind);
+
 }  // namespace drape::ccd
