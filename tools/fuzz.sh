@@ -1,13 +1,14 @@
 #!/usr/bin/env bash
 # Builds the libFuzzer targets with clang (AddressSanitizer, UBSan, coverage) in
-# ${BUILD_DIR:-build-fuzz} and runs each for ${FUZZ_SECONDS:-60} seconds, seeded with the
-# shipped scenes and query files. A crash leaves its input in tests/data/fuzz-regressions/
+# ${BUILD_DIR:-build-fuzz} and runs each, seeded with the shipped scenes and query files:
+# ${FUZZ_RUNS:-100000} inputs from a fixed seed (repeatable, as CI runs it), or for
+# FUZZ_SECONDS seconds when that is set (exploration, a new seed each time). A crash leaves its input in tests/data/fuzz-regressions/
 # (fix it, keep the file: tests replay every file there through the parsers).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 bash tools/install-deps.sh
 BUILD_DIR=${BUILD_DIR:-build-fuzz}
-SECONDS_EACH=${FUZZ_SECONDS:-60}
+if [ -n "${FUZZ_SECONDS:-}" ]; then LIMIT="-max_total_time=$FUZZ_SECONDS"; else LIMIT="-runs=${FUZZ_RUNS:-100000} -seed=20261122"; fi
 FLAGS="-fsanitize=fuzzer-no-link,address,undefined -fno-sanitize-recover=all -O1 -g"
 CC=clang CXX=clang++ cmake -S . -B "$BUILD_DIR" -DCMAKE_BUILD_TYPE=Debug -DDRAPE_BUILD_TESTS=OFF -DDRAPE_BUILD_BENCH=OFF \
   -DDRAPE_BUILD_FUZZERS=ON -DCMAKE_CXX_FLAGS="$FLAGS" -DCMAKE_EXE_LINKER_FLAGS="-fsanitize=address,undefined" >/dev/null
@@ -17,7 +18,10 @@ mkdir -p tests/data/fuzz-regressions "$BUILD_DIR/corpus/scene" "$BUILD_DIR/corpu
 cp scenes/*.json "$BUILD_DIR/corpus/scene/"
 cp tests/data/ccd-queries/unit-tests/*/*.csv "$BUILD_DIR/corpus/query_file/" 2>/dev/null || true
 for target in scene query_file; do
-  echo "fuzzing the $target parser for $SECONDS_EACH s"
-  "$BUILD_DIR/tests/fuzz/fuzz_$target" -max_total_time="$SECONDS_EACH" -max_len=65536 -rss_limit_mb=4096 -timeout=10 \
-    -artifact_prefix=tests/data/fuzz-regressions/"$target"- "$BUILD_DIR/corpus/$target" 2>&1 | tail -3
+  echo "fuzzing the $target parser ($LIMIT)"
+  # shellcheck disable=SC2086
+  "$BUILD_DIR/tests/fuzz/fuzz_$target" $LIMIT -max_len=65536 -rss_limit_mb=4096 -timeout=10 \
+    -artifact_prefix=tests/data/fuzz-regressions/"$target"- "$BUILD_DIR/corpus/$target" > "$BUILD_DIR/fuzz_$target.log" 2>&1 \
+    || { tail -30 "$BUILD_DIR/fuzz_$target.log"; echo "fuzz_$target found a crash: see tests/data/fuzz-regressions/"; exit 1; }
+  tail -1 "$BUILD_DIR/fuzz_$target.log"
 done
