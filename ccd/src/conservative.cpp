@@ -28,9 +28,6 @@ constexpr Scalar WINDOW_ROOT_FRACTION = 1e-3;
 // interval budget (bounds the worst case, an exactly coplanar sliding motion).
 constexpr int EXTENDED_EXTRA_LEVELS = 34;
 constexpr int EXTENDED_MAX_INTERVALS = 256;
-// A cubic whose coefficients are within this factor of their rounding error is searched in
-// long double from the start: double precision would leave many intervals undecided.
-constexpr Scalar POORLY_RESOLVED_RATIO = 2048.0;
 constexpr int STACK_SIZE = 160;  // depth-first: at most one pending sibling per level
 
 using Extended = long double;
@@ -243,7 +240,7 @@ Result conservative_search(const Problem& p, bool use_cubic) {
   // other methods (use_cubic = false) stays in double.
   const bool exact_contact = p.options.thickness == 0 && use_cubic;
   Outcome<Scalar> out;
-  if (exact_contact && max_abs(p.cubic.b) <= POORLY_RESOLVED_RATIO * p.cubic.error) {
+  if (exact_contact && cubic_poorly_resolved(p.cubic)) {
     // Coplanar, or nearly, to double precision: the whole step is searched in long double,
     // where the cubic may still tell (its rounding error is 2^11 times smaller).
     const auto fine = extended_search(p, use_cubic, 0.0, 1.0);

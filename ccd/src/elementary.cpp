@@ -77,7 +77,7 @@ bool culled_by_sign(const Problem& p) {
 }
 
 Result cubic_method(const Problem& p) {
-  if (detail::cubic_vanishes(p.cubic)) return degenerate_path(p);
+  if (detail::cubic_poorly_resolved(p.cubic)) return degenerate_path(p);
   Result result;
   result.path = Path::Solved;
   result.root_solves = 1;
@@ -93,6 +93,8 @@ Result cubic_method(const Problem& p) {
 }
 
 Result dnf_method(const Problem& p) {
+  // Unreliable roots first, as cubic does: the filter must not cull what cubic would find.
+  if (detail::cubic_poorly_resolved(p.cubic)) return degenerate_path(p);
   if (culled_by_sign(p)) return Result{};
   return cubic_method(p);
 }
@@ -104,8 +106,9 @@ Result dnf_method(const Problem& p) {
 
 Result vincent_method(const Problem& p) {
   const Bernstein3& b = p.cubic.b;
-  if (culled_by_sign(p)) return Result{};  // the common case first
-  if (detail::cubic_vanishes(p.cubic)) return degenerate_path(p);
+  // Unreliable roots first, as cubic does: the filter must not cull what cubic would find.
+  if (detail::cubic_poorly_resolved(p.cubic)) return degenerate_path(p);
+  if (culled_by_sign(p)) return Result{};
   Result result;
   if (root_possible_at_start(p)) {  // the features may start coplanar
     result.path = Path::Solved;
