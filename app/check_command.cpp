@@ -1,6 +1,5 @@
 // drape check: the independent penetration check over every saved frame of a run.
 #include <iostream>
-#include <regex>
 
 #include "commands.h"
 #include "drape/core/mesh_io.h"

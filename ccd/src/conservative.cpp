@@ -62,17 +62,6 @@ Scalar thickness_to_cubic(QueryKind kind, const Query& q, Scalar thickness) {
   return thickness * factor * (1 + 16 * UNIT_ROUNDOFF);
 }
 
-template <class T>
-T max_abs(const Coefficients<T>& b) {
-  return std::max({std::abs(b[0]), std::abs(b[1]), std::abs(b[2]), std::abs(b[3])});
-}
-
-template <class T>
-bool certainly_nonzero(const Coefficients<T>& b, T margin) {
-  return (b[0] > margin && b[1] > margin && b[2] > margin && b[3] > margin) ||
-         (b[0] < -margin && b[1] < -margin && b[2] < -margin && b[3] < -margin);
-}
-
 // de Casteljau split at local parameter s.
 template <class T>
 void split_at(const Coefficients<T>& b, T s, Coefficients<T>& left, Coefficients<T>& right) {

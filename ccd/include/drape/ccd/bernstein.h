@@ -39,8 +39,10 @@ inline bool same_strict_sign(const Bernstein3& b) {
 }
 
 /// True when every coefficient exceeds margin in one sign: the cubic is then certainly
-/// nonzero on the interval even if each coefficient is off by up to margin.
-inline bool certainly_nonzero(const Bernstein3& b, Scalar margin) {
+/// nonzero on the interval even if each coefficient is off by up to margin. Any precision (the
+/// conservative method also works in long double).
+template <class T>
+bool certainly_nonzero(const std::array<T, 4>& b, T margin) {
   return (b[0] > margin && b[1] > margin && b[2] > margin && b[3] > margin) ||
          (b[0] < -margin && b[1] < -margin && b[2] < -margin && b[3] < -margin);
 }
@@ -87,8 +89,9 @@ inline Scalar evaluate_bernstein(const Bernstein3& b, Scalar s) {
   return r * b012 + s * b123;
 }
 
-inline Scalar max_abs(const Bernstein3& b) {
-  return std::max(std::max(std::abs(b[0]), std::abs(b[1])), std::max(std::abs(b[2]), std::abs(b[3])));
+template <class T>
+T max_abs(const std::array<T, 4>& b) {
+  return std::max({std::abs(b[0]), std::abs(b[1]), std::abs(b[2]), std::abs(b[3])});
 }
 
 }  // namespace drape::ccd
