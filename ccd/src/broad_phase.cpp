@@ -18,6 +18,15 @@ Aabb swept_box(const std::array<std::int32_t, 3>& triangle, std::span<const Vec3
   return box;
 }
 
+std::vector<Aabb> vertex_boxes(std::span<const Vec3> start, std::span<const Vec3> end, Scalar margin) {
+  std::vector<Aabb> boxes(start.size());
+  for (std::size_t v = 0; v < start.size(); ++v) {
+    boxes[v].min = start[v].cwiseMin(end[v]).array() - margin;
+    boxes[v].max = start[v].cwiseMax(end[v]).array() + margin;
+  }
+  return boxes;
+}
+
 namespace {
 
 btDbvtVolume volume_of(const Aabb& box) {
@@ -86,21 +95,38 @@ std::vector<std::pair<std::int32_t, std::int32_t>> BoxTree::pairs_with(const Box
 }
 
 Candidates feature_pairs(std::span<const TriangleIndices> triangles_a, std::span<const TriangleIndices> triangles_b,
-                         std::span<const std::pair<std::int32_t, std::int32_t>> pairs) {
+                         std::span<const std::pair<std::int32_t, std::int32_t>> pairs,
+                         std::span<const Aabb> vertex_boxes) {
   Candidates out;
+  const bool cull = !vertex_boxes.empty();
+  const auto union_of = [&](std::span<const std::int32_t> vertices) {
+    Aabb box = vertex_boxes[vertices[0]];
+    for (std::size_t k = 1; k < vertices.size(); ++k) {
+      box.min = box.min.cwiseMin(vertex_boxes[vertices[k]].min);
+      box.max = box.max.cwiseMax(vertex_boxes[vertices[k]].max);
+    }
+    return box;
+  };
   std::vector<std::array<std::int32_t, 4>> vf, ee;  // (vertex, face corners) and (edge, edge), canonical
   vf.reserve(pairs.size() * 6);
   ee.reserve(pairs.size() * 9);
   const auto shares = [](std::int32_t v, const TriangleIndices& t) { return v == t[0] || v == t[1] || v == t[2]; };
   const auto add_vertex_face = [&](const TriangleIndices& from, const TriangleIndices& face) {
+    const Aabb face_box = cull ? union_of(face) : Aabb{};
     for (std::int32_t v : from)
-      if (!shares(v, face)) vf.push_back({v, face[0], face[1], face[2]});
+      if (!shares(v, face) && (!cull || overlap(vertex_boxes[v], face_box))) vf.push_back({v, face[0], face[1], face[2]});
   };
   for (const auto& [ia, ib] : pairs) {
     const TriangleIndices& a = triangles_a[ia];
     const TriangleIndices& b = triangles_b[ib];
     add_vertex_face(a, b);
     add_vertex_face(b, a);
+    std::array<Aabb, 3> edge_box_a, edge_box_b;
+    if (cull)
+      for (int i = 0; i < 3; ++i) {
+        edge_box_a[i] = union_of(std::array<std::int32_t, 2>{a[i], a[(i + 1) % 3]});
+        edge_box_b[i] = union_of(std::array<std::int32_t, 2>{b[i], b[(i + 1) % 3]});
+      }
     for (int i = 0; i < 3; ++i) {
       std::array<std::int32_t, 2> e{a[i], a[(i + 1) % 3]};
       if (e[0] > e[1]) std::swap(e[0], e[1]);
@@ -108,6 +134,7 @@ Candidates feature_pairs(std::span<const TriangleIndices> triangles_a, std::span
         std::array<std::int32_t, 2> f{b[j], b[(j + 1) % 3]};
         if (f[0] > f[1]) std::swap(f[0], f[1]);
         if (e[0] == f[0] || e[0] == f[1] || e[1] == f[0] || e[1] == f[1]) continue;
+        if (cull && !overlap(edge_box_a[i], edge_box_b[j])) continue;
         // The same two edges can come from (a, b) or (b, a): order them.
         if (f < e) ee.push_back({f[0], f[1], e[0], e[1]});
         else ee.push_back({e[0], e[1], f[0], f[1]});

@@ -72,6 +72,7 @@ struct CollisionPipeline::Impl {
   std::vector<Scalar> inverse_mass;  // combined array; 0 for kinematic vertices
   std::vector<Vec3> start, end;      // combined positions at t and t + h
   std::vector<ccd::Aabb> boxes;
+  std::vector<ccd::Aabb> features;  // per-vertex swept boxes for feature_pairs (empty: no feature culling)
   ccd::Options options;
   CollisionPipeline::Observer observer;
 
@@ -103,6 +104,8 @@ struct CollisionPipeline::Impl {
     boxes.resize(cloth_triangles.size());
     for (std::size_t i = 0; i < cloth_triangles.size(); ++i) boxes[i] = ccd::swept_box(cloth_triangles[i], start, end, margin);
     cloth_tree.update(boxes);
+    if (model.scene.collisions.feature_boxes) features = ccd::vertex_boxes(start, end, margin);
+    else features.clear();
     const auto append = [&](ccd::Candidates&& c) {
       all.vertex_face.insert(all.vertex_face.end(), c.vertex_face.begin(), c.vertex_face.end());
       all.edge_edge.insert(all.edge_edge.end(), c.edge_edge.begin(), c.edge_edge.end());
@@ -110,7 +113,7 @@ struct CollisionPipeline::Impl {
     if (model.scene.collisions.self) {
       const auto pairs = cloth_tree.self_pairs();
       counters.bvh_pairs += long(pairs.size());
-      append(ccd::feature_pairs(cloth_triangles, cloth_triangles, pairs));
+      append(ccd::feature_pairs(cloth_triangles, cloth_triangles, pairs, features));
     }
     for (MeshObstacle& mo : obstacles) {
       std::vector<ccd::Aabb> obstacle_boxes(mo.triangles.size());
@@ -118,7 +121,7 @@ struct CollisionPipeline::Impl {
       mo.tree.update(obstacle_boxes);
       const auto pairs = cloth_tree.pairs_with(mo.tree);
       counters.bvh_pairs += long(pairs.size());
-      append(ccd::feature_pairs(cloth_triangles, mo.triangles, pairs));
+      append(ccd::feature_pairs(cloth_triangles, mo.triangles, pairs, features));
     }
     return all;
   }

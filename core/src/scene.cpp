@@ -346,7 +346,7 @@ Scene parse_scene(const std::string& text, const std::filesystem::path& file) {
   }
   if (n.has("collisions")) {
     const Node c = n.at("collisions");
-    c.allow({"self", "obstacles", "thickness", "method", "max_impulse_iterations", "max_zone_iterations"});
+    c.allow({"self", "obstacles", "thickness", "method", "max_impulse_iterations", "max_zone_iterations", "feature_boxes"});
     if (c.has("self")) s.collisions.self = c.at("self").boolean();
     if (c.has("obstacles")) s.collisions.obstacles = c.at("obstacles").boolean();
     if (c.has("thickness")) s.collisions.thickness = c.at("thickness").non_negative();
@@ -354,6 +354,7 @@ Scene parse_scene(const std::string& text, const std::filesystem::path& file) {
       s.collisions.method = *ccd::parse_method(c.at("method").one_of({"cubic", "dnf", "vincent", "conservative"}));
     if (c.has("max_impulse_iterations")) s.collisions.max_impulse_iterations = c.at("max_impulse_iterations").integer_in(0, 1000);
     if (c.has("max_zone_iterations")) s.collisions.max_zone_iterations = c.at("max_zone_iterations").integer_in(0, 1000);
+    if (c.has("feature_boxes")) s.collisions.feature_boxes = c.at("feature_boxes").boolean();
   }
   if (n.has("output")) {
     const Node o = n.at("output");

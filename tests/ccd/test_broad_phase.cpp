@@ -11,10 +11,6 @@ using namespace drape::ccd;
 
 namespace {
 
-bool overlap(const Aabb& a, const Aabb& b) {
-  return (a.min.array() <= b.max.array()).all() && (b.min.array() <= a.max.array()).all();
-}
-
 std::vector<Aabb> random_boxes(std::mt19937_64& rng, int count) {
   std::uniform_real_distribution<Scalar> u(0, 1), size(0.01, 0.1);
   std::vector<Aabb> boxes;
@@ -84,4 +80,58 @@ TEST(FeaturePairs, FeaturesSharingAVertexAreSkippedAndSharedEdgesTestedOnce) {
   std::set<std::array<std::int32_t, 4>> unique;
   for (const auto& p : fan.edge_edge) unique.insert({p.edge_a[0], p.edge_a[1], p.edge_b[0], p.edge_b[1]});
   EXPECT_EQ(unique.size(), fan.edge_edge.size());
+}
+
+// Feature boxes drop exactly the pairs whose features' boxes are apart, and nothing the
+// conservative test would find within twice the margin.
+TEST(FeaturePairs, FeatureBoxesDropOnlyPairsThatStayApart) {
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<Scalar> coordinate(0, 1), step(-0.05, 0.05);
+  constexpr int TRIANGLES = 60;
+  constexpr Scalar MARGIN = 0.02;
+  std::vector<Vec3> start, end;
+  std::vector<TriangleIndices> tris;
+  for (int t = 0; t < TRIANGLES; ++t) {
+    const Vec3 centre(coordinate(rng), coordinate(rng), coordinate(rng));
+    for (int k = 0; k < 3; ++k) {
+      start.push_back(centre + Vec3(step(rng), step(rng), step(rng)) * 2);
+      end.push_back(start.back() + Vec3(step(rng), step(rng), step(rng)));
+    }
+    tris.push_back({3 * t, 3 * t + 1, 3 * t + 2});
+  }
+  std::vector<std::pair<std::int32_t, std::int32_t>> pairs;
+  for (int i = 0; i < TRIANGLES; ++i)
+    for (int j = i + 1; j < TRIANGLES; ++j) pairs.emplace_back(i, j);
+  const auto boxes = vertex_boxes(start, end, MARGIN);
+  const Candidates all = feature_pairs(tris, tris, pairs);
+  const Candidates kept = feature_pairs(tris, tris, pairs, boxes);
+  const auto box_of = [&](std::initializer_list<std::int32_t> vertices) {
+    Aabb b = boxes[*vertices.begin()];
+    for (auto v : vertices) b.min = b.min.cwiseMin(boxes[v].min), b.max = b.max.cwiseMax(boxes[v].max);
+    return b;
+  };
+  Options near;
+  near.method = Method::Conservative;
+  near.thickness = 1.999 * MARGIN;
+  const BatchInput input{start, end, {}, {}};
+  std::size_t vf_kept = 0, ee_kept = 0;
+  for (const auto& p : all.vertex_face) {
+    const bool apart = !overlap(boxes[p.vertex], box_of({p.face[0], p.face[1], p.face[2]}));
+    vf_kept += !apart;
+    if (apart) {
+      EXPECT_FALSE(vertex_face_ccd(gather(input, p), near).hit);
+    }
+  }
+  for (const auto& p : all.edge_edge) {
+    const bool apart = !overlap(box_of({p.edge_a[0], p.edge_a[1]}), box_of({p.edge_b[0], p.edge_b[1]}));
+    ee_kept += !apart;
+    if (apart) {
+      EXPECT_FALSE(edge_edge_ccd(gather(input, p), near).hit);
+    }
+  }
+  EXPECT_EQ(kept.vertex_face.size(), vf_kept);
+  EXPECT_EQ(kept.edge_edge.size(), ee_kept);
+  EXPECT_GT(vf_kept, 0u);
+  EXPECT_LT(vf_kept, all.vertex_face.size());  // the random set has both kinds
+  EXPECT_LT(ee_kept, all.edge_edge.size());
 }

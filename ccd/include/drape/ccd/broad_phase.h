@@ -24,6 +24,14 @@ struct Aabb {
 Aabb swept_box(const std::array<std::int32_t, 3>& triangle, std::span<const Vec3> start, std::span<const Vec3> end,
                Scalar margin);
 
+/// The boxes of single vertices moving from start to end, grown by margin: feature_pairs
+/// culls a feature pair whose features' boxes (unions of their vertices' boxes) are apart.
+std::vector<Aabb> vertex_boxes(std::span<const Vec3> start, std::span<const Vec3> end, Scalar margin);
+
+inline bool overlap(const Aabb& a, const Aabb& b) {
+  return (a.min.array() <= b.max.array()).all() && (b.min.array() <= a.max.array()).all();
+}
+
 /// A btDbvt over boxes, one leaf per box, kept behind this type.
 class BoxTree {
  public:
@@ -51,6 +59,12 @@ class BoxTree {
 /// edge-edge pair appears once however many triangle pairs hold it. Indices refer to one
 /// vertex array (offset the second mesh's indices when the two meshes differ). Sorted, so the
 /// order does not depend on how the pairs were found.
+///
+/// With vertex boxes (vertex_boxes(), indexed like the triangles), a pair is also dropped when
+/// the boxes of its two features do not overlap: with boxes grown by the same margin as the
+/// triangles', such features stay more than twice the margin apart along some axis during the
+/// whole step, so no elementary test could report them. Most pairs of neighbouring triangles
+/// of one sheet go this way; they are nearly coplanar, which no coplanarity filter can cull.
 struct Candidates {
   std::vector<VertexFacePair> vertex_face;
   std::vector<EdgeEdgePair> edge_edge;
@@ -61,6 +75,7 @@ using TriangleIndices = std::array<std::int32_t, 3>;
 /// pairs index triangles_a (first) and triangles_b (second); for self-collision pass the same
 /// span twice.
 Candidates feature_pairs(std::span<const TriangleIndices> triangles_a, std::span<const TriangleIndices> triangles_b,
-                         std::span<const std::pair<std::int32_t, std::int32_t>> pairs);
+                         std::span<const std::pair<std::int32_t, std::int32_t>> pairs,
+                         std::span<const Aabb> vertex_boxes = {});
 
 }  // namespace drape::ccd
