@@ -1,71 +1,170 @@
-// scene_bench: runs a scene once and, at every measured frame, times each CCD method on the
-// identical candidate sets of that frame's last step, side by side, with the filter's cull
-// rates and the agreement of the methods' hits.
+// scene_bench: the paper's cloth benchmark on any scene. Runs the scene once; at every
+// measured frame it times each CCD method on the identical elementary tests of that frame (the
+// first detection round of every step of the frame, as the simulation made them), side by
+// side: candidate pairs, tests, cull rates of dnf and vincent, narrow-phase milliseconds per
+// method, speed-ups, and the agreement of the methods' hits (every difference printed).
 //
-//   scene_bench SCENE [--frames N] [--every K] [--passes P] [--threads T]
+//   scene_bench SCENE [--frames N] [--every K] [--passes P] [--check] [--no-feature-boxes]
+//                     [--dump-ccd DIR [--dump-frame F] [--dump-limit Q]]
 #include <CLI/CLI.hpp>
+#include <algorithm>
 #include <chrono>
 #include <cstdio>
+#include <filesystem>
 
 #include "drape/ccd/evaluation.h"
+#include "drape/ccd/query_file.h"
 #include "drape/core/integrator.h"
 #include "drape/core/penetration.h"
 
 using namespace drape;
+namespace fs = std::filesystem;
 
 namespace {
 
-struct Captured {
-  long triangle_pairs = 0;
+// One detection round's tests, with the positions they index.
+struct Batch {
   std::vector<Vec3> start, end;
   std::vector<ccd::VertexFacePair> vertex_face;
   std::vector<ccd::EdgeEdgePair> edge_edge;
+  std::size_t tests() const { return vertex_face.size() + edge_edge.size(); }
 };
+
+struct Frame {
+  int number = 0;
+  long triangle_pairs = 0;
+  std::vector<Batch> batches;
+  std::size_t vertex_face() const {
+    std::size_t n = 0;
+    for (const Batch& b : batches) n += b.vertex_face.size();
+    return n;
+  }
+  std::size_t tests() const {
+    std::size_t n = 0;
+    for (const Batch& b : batches) n += b.tests();
+    return n;
+  }
+};
+
+constexpr ccd::Method METHODS[4] = {ccd::Method::Cubic, ccd::Method::Dnf, ccd::Method::Vincent, ccd::Method::Conservative};
+enum { CUBIC, DNF, VINCENT, CONSERVATIVE };
 
 struct MethodRun {
-  double ms = 0;
+  double ms = 0;  // median over the passes of the whole frame's narrow phase
   ccd::BatchCounters counters;
-  std::vector<bool> hits;
+  std::vector<bool> hits;  // every test of the frame, batch after batch, vertex-face first
 };
 
-MethodRun time_method(const Captured& c, ccd::Method method, int passes) {
-  const ccd::BatchInput input{c.start, c.end, c.vertex_face, c.edge_edge};
+MethodRun time_method(const Frame& frame, ccd::Method method, int passes) {
   ccd::Options options;
-  options.method = method;
+  options.method = method;  // thickness 0: exact contact, as the simulation's pipeline asks
   MethodRun run;
   std::vector<double> ms;
   for (int p = 0; p < passes; ++p) {
-    const auto begin = std::chrono::steady_clock::now();
-    const ccd::BatchOutput out = ccd::run_batch(input, options, 1);
-    ms.push_back(std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - begin).count());
-    if (p == 0) {
-      run.counters = out.counters;
-      for (const auto& r : out.vertex_face) run.hits.push_back(r.hit);
-      for (const auto& r : out.edge_edge) run.hits.push_back(r.hit);
+    double total = 0;
+    for (const Batch& b : frame.batches) {
+      const ccd::BatchInput input{b.start, b.end, b.vertex_face, b.edge_edge};
+      const auto begin = std::chrono::steady_clock::now();
+      const ccd::BatchOutput out = ccd::run_batch(input, options, 1);
+      total += std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - begin).count();
+      if (p == 0) {
+        run.counters += out.counters;
+        for (const auto& r : out.vertex_face) run.hits.push_back(r.hit);
+        for (const auto& r : out.edge_edge) run.hits.push_back(r.hit);
+      }
     }
+    ms.push_back(total);
   }
   run.ms = ccd::median(ms);
   return run;
 }
 
+// Where test i of a frame lives: its batch, kind and index there.
+struct Located {
+  const Batch* batch;
+  bool vertex_face;
+  std::size_t index;
+};
+Located locate(const Frame& frame, std::size_t i) {
+  for (const Batch& b : frame.batches) {
+    if (i < b.vertex_face.size()) return {&b, true, i};
+    i -= b.vertex_face.size();
+    if (i < b.edge_edge.size()) return {&b, false, i};
+    i -= b.edge_edge.size();
+  }
+  return {nullptr, false, 0};
+}
+
+// Writes up to limit tests of each kind of the frame (an even sample when there are more) in
+// the public query format; the truth column holds the conservative method's verdict.
+void dump_frame(const Frame& frame, const fs::path& dir, const std::string& stem, std::size_t limit) {
+  ccd::Options conservative;
+  conservative.method = ccd::Method::Conservative;
+  for (const ccd::QueryKind kind : {ccd::QueryKind::VertexFace, ccd::QueryKind::EdgeEdge}) {
+    const bool vf = kind == ccd::QueryKind::VertexFace;
+    std::size_t total = 0;
+    for (const Batch& b : frame.batches) total += vf ? b.vertex_face.size() : b.edge_edge.size();
+    const std::size_t stride = std::max<std::size_t>(1, (total + limit - 1) / std::max<std::size_t>(limit, 1));
+    ccd::QueryFile file;
+    file.kind = kind;
+    std::size_t i = 0;
+    for (const Batch& b : frame.batches) {
+      const ccd::BatchInput input{b.start, b.end, b.vertex_face, b.edge_edge};
+      const std::size_t n = vf ? b.vertex_face.size() : b.edge_edge.size();
+      for (std::size_t k = 0; k < n; ++k, ++i) {
+        if (i % stride != 0) continue;
+        const ccd::Query q = vf ? ccd::Query(ccd::gather(input, b.vertex_face[k])) : ccd::Query(ccd::gather(input, b.edge_edge[k]));
+        file.queries.push_back(q);
+        file.truth.push_back(ccd::elementary_ccd(kind, q, conservative).hit);
+      }
+    }
+    const fs::path folder = dir / std::string(ccd::kind_name(kind));
+    fs::create_directories(folder);
+    file.path = folder / (stem + ".csv");
+    ccd::write_query_file(file.path, file);
+    std::printf("wrote %s: %zu of the frame's %zu %s tests, %ld with contact (conservative's verdict)\n",
+                file.path.c_str(), file.queries.size(), total, std::string(ccd::kind_name(kind)).c_str(),
+                long(std::count(file.truth.begin(), file.truth.end(), true)));
+  }
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
-  CLI::App app{"Runs a scene and times every CCD method on the identical candidate sets of its frames."};
-  std::string scene_path;
-  int frames = 0, every = 1, passes = 5, threads = 1;
-  bool check = false;
+  CLI::App app{
+      "The paper's cloth benchmark on a scene: runs it once and, at the measured frames, times every CCD method "
+      "on the identical elementary tests of the frame (the first detection round of each of its steps), with cull "
+      "rates, speed-ups and the agreement of their hits.\n\nExample: scene_bench scenes/pile.json --every 10 --check"};
+  std::string scene_path, dump_dir;
+  int frames = 0, every = 1, passes = 3, threads = 1, dump_frame_number = 0;
+  std::size_t dump_limit = 200000;
+  bool check = false, no_feature_boxes = false;
   app.add_option("scene", scene_path, "Scene file")->required()->check(CLI::ExistingFile);
-  app.add_option("--frames", frames, "Frames to run (default: the scene's)");
-  app.add_option("--every", every, "Measure every K-th frame")->capture_default_str();
-  app.add_option("--passes", passes, "Timed passes per method (median)")->capture_default_str();
-  app.add_option("--threads", threads, "Threads of the simulation's own narrow phase")->capture_default_str();
+  app.add_option("--frames", frames, "Frames to run (default: the scene's)")->check(CLI::PositiveNumber);
+  app.add_option("--every", every, "Measure every K-th frame")->capture_default_str()->check(CLI::PositiveNumber);
+  app.add_option("--passes", passes, "Timed passes per method and frame (the median is printed)")
+      ->capture_default_str()
+      ->check(CLI::PositiveNumber);
+  app.add_option("--threads", threads, "Threads of the simulation's own narrow phase (the timed ones use one)")
+      ->capture_default_str()
+      ->check(CLI::Range(1, 256));
   app.add_flag("--check", check, "Run the independent penetration check on every frame");
+  app.add_flag("--no-feature-boxes", no_feature_boxes,
+               "Keep every feature pair of overlapping triangles (the paper's 15 tests per triangle pair)");
+  app.add_option("--dump-ccd", dump_dir,
+                 "Write the tests of one measured frame as query files DIR/vertex-face/*.csv and DIR/edge-edge/*.csv "
+                 "(read back by `drape ccd DIR`); truth column: the conservative method's verdict");
+  app.add_option("--dump-frame", dump_frame_number, "The frame to dump (default: the measured frame with most tests)");
+  app.add_option("--dump-limit", dump_limit, "At most this many tests of each kind (an even sample)")
+      ->capture_default_str()
+      ->check(CLI::PositiveNumber);
   CLI11_PARSE(app, argc, argv);
 
   Model model;
   try {
-    model = build_model(load_scene(scene_path));
+    Scene scene = load_scene(scene_path);
+    if (no_feature_boxes) scene.collisions.feature_boxes = false;
+    model = build_model(scene);
   } catch (const SceneError& e) {
     std::fprintf(stderr, "scene_bench: %s\n", e.what());
     return 2;
@@ -74,62 +173,123 @@ int main(int argc, char** argv) {
   State state = initial_state(model);
   Integrator integrator(model, make_linear_solver(model.scene.solver), threads);
   if (!integrator.collisions()) {
-    std::fprintf(stderr, "scene_bench: %s has no collision pipeline (no self-collision, no mesh obstacle)\n", scene_path.c_str());
+    std::fprintf(stderr, "scene_bench: %s has no collision pipeline (no self-collision, no mesh obstacle)\n",
+                 scene_path.c_str());
     return 2;
   }
-  Captured captured;
+  Frame current;
   integrator.collisions()->set_observer([&](const ccd::BatchInput& in, long triangle_pairs) {
-    captured.triangle_pairs = triangle_pairs;
-    captured.start.assign(in.start.begin(), in.start.end());
-    captured.end.assign(in.end.begin(), in.end.end());
-    captured.vertex_face.assign(in.vertex_face.begin(), in.vertex_face.end());
-    captured.edge_edge.assign(in.edge_edge.begin(), in.edge_edge.end());
+    current.triangle_pairs += triangle_pairs;
+    Batch& b = current.batches.emplace_back();
+    b.start.assign(in.start.begin(), in.start.end());
+    b.end.assign(in.end.begin(), in.end.end());
+    b.vertex_face.assign(in.vertex_face.begin(), in.vertex_face.end());
+    b.edge_edge.assign(in.edge_edge.begin(), in.edge_edge.end());
   });
 
-  std::printf("scene_bench %s: %zu vertices, %d frames of %d steps; narrow phase timed on one thread, median of %d\n",
-              scene_path.c_str(), model.vertex_count(), frames, model.scene.frame_steps, passes);
-  std::printf("%5s %8s %9s %9s %7s %7s %9s %9s %9s %9s %8s %8s %6s %6s %9s %5s\n", "frame", "pairs", "vf_tests", "ee_tests",
-              "dnf%", "vin%", "cubic_ms", "dnf_ms", "vin_ms", "cons_ms", "vin/cub", "vin/dnf", "hits", "diff", "step_ms", "pen");
-  double total[4] = {0, 0, 0, 0};
-  long disagreements = 0, penetrations = 0, tests = 0, culled_vincent = 0;
-  for (int frame = 1; frame <= frames; ++frame) {
-    double step_ms = 0;
+  std::printf("scene_bench %s: %zu vertices, %zu triangles, %d frames of %d steps (h = %.4g s), feature boxes %s\n",
+              scene_path.c_str(), model.vertex_count(), model.triangles.size(), frames, model.scene.frame_steps,
+              model.scene.timestep(), model.scene.collisions.feature_boxes ? "on" : "off (paper's count)");
+  std::printf("per measured frame: the first detection round of each of its steps; one thread; median of %d passes\n\n",
+              passes);
+  std::printf("%5s %9s %10s %7s %7s %8s %9s %9s %9s %9s %8s %8s %8s %6s %5s %8s %4s\n", "frame", "tri_pairs", "tests",
+              "dnf%", "vin%", "vin%nc", "cubic_ms", "dnf_ms", "vin_ms", "cons_ms", "vin/cub", "vin/dnf", "cons/vin",
+              "hits", "diff", "step_ms", "pen");
+  struct Measured {
+    int frame;
+    std::size_t tests, hits, culled_vincent;
+    double ms[4];
+  };
+  std::vector<Measured> measured;
+  long disagreements = 0, penetrations = 0;
+  Frame dump;
+  for (int f = 1; f <= frames; ++f) {
+    current = Frame{};
+    current.number = f;
+    const auto frame_begin = std::chrono::steady_clock::now();
     for (int step = 0; step < model.scene.frame_steps; ++step) {
-      const auto begin = std::chrono::steady_clock::now();
       const StepReport r = integrator.step(state);
-      step_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - begin).count();
       if (!r.ok) {
-        std::printf("stopped at frame %d: %s\n", frame, r.failure.c_str());
+        std::printf("stopped at frame %d: %s\n", f, r.failure.c_str());
         return 3;
       }
     }
+    const double step_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - frame_begin).count() /
+                           model.scene.frame_steps;
     int found = 0;
     if (check) penetrations += found = int(find_penetrations(model, state.positions, state.time).size());
-    if (frame % every != 0) continue;
+    if (f % every != 0) continue;
     MethodRun runs[4];
-    const ccd::Method methods[4] = {ccd::Method::Cubic, ccd::Method::Dnf, ccd::Method::Vincent, ccd::Method::Conservative};
-    for (int m = 0; m < 4; ++m) runs[m] = time_method(captured, methods[m], passes), total[m] += runs[m].ms;
-    long diff = 0, hits = 0;
-    for (std::size_t i = 0; i < runs[2].hits.size(); ++i) {
-      hits += runs[2].hits[i];
-      diff += runs[0].hits[i] != runs[2].hits[i] || runs[1].hits[i] != runs[2].hits[i];
+    for (int m = 0; m < 4; ++m) runs[m] = time_method(current, METHODS[m], passes);
+    long diff = 0;
+    std::size_t hits = 0;
+    for (std::size_t i = 0; i < runs[VINCENT].hits.size(); ++i) {
+      hits += runs[VINCENT].hits[i];
+      const bool differs = runs[CUBIC].hits[i] != runs[VINCENT].hits[i] || runs[DNF].hits[i] != runs[VINCENT].hits[i] ||
+                           runs[CONSERVATIVE].hits[i] < runs[VINCENT].hits[i];
+      if (!differs) continue;
+      if (++diff <= 10) {
+        const Located at = locate(current, i);
+        std::printf("  differs: frame %d %s test %zu: cubic %d dnf %d vincent %d conservative %d\n", f,
+                    at.vertex_face ? "vertex-face" : "edge-edge", at.index, int(runs[CUBIC].hits[i]),
+                    int(runs[DNF].hits[i]), int(runs[VINCENT].hits[i]), int(runs[CONSERVATIVE].hits[i]));
+      }
     }
     disagreements += diff;
-    const double n = double(captured.vertex_face.size() + captured.edge_edge.size());
-    tests += long(n);
-    culled_vincent += long(runs[2].counters.culled);
-    std::printf("%5d %8zu %9zu %9zu %6.2f%% %6.2f%% %9.2f %9.2f %9.2f %9.2f %7.1fx %7.2fx %6ld %6ld %9.1f %5s\n", frame,
-                size_t(captured.triangle_pairs), captured.vertex_face.size(), captured.edge_edge.size(),
-                n ? 100.0 * runs[1].counters.culled / n : 0.0, n ? 100.0 * runs[2].counters.culled / n : 0.0, runs[0].ms,
-                runs[1].ms, runs[2].ms, runs[3].ms, runs[0].ms / runs[2].ms, runs[1].ms / runs[2].ms, hits, diff, step_ms,
-                check ? std::to_string(found).c_str() : "-");
+    const std::size_t n = current.tests();
+    const std::size_t culled = runs[VINCENT].counters.culled;
+    const auto pct = [](double a, double b) { return b > 0 ? 100.0 * a / b : 0.0; };
+    std::printf("%5d %9ld %10zu %6.2f%% %6.2f%% %7.2f%% %9.2f %9.2f %9.2f %9.2f %7.2fx %7.2fx %7.2fx %6zu %5ld %8.1f %4s\n", f,
+                current.triangle_pairs, n, pct(double(runs[DNF].counters.culled), double(n)), pct(double(culled), double(n)),
+                pct(double(culled), double(n - hits)), runs[CUBIC].ms, runs[DNF].ms, runs[VINCENT].ms, runs[CONSERVATIVE].ms,
+                runs[CUBIC].ms / runs[VINCENT].ms, runs[DNF].ms / runs[VINCENT].ms, runs[CONSERVATIVE].ms / runs[VINCENT].ms,
+                hits, diff, step_ms, check ? std::to_string(found).c_str() : "-");
+    std::fflush(stdout);
+    measured.push_back({f, n, hits, culled, {runs[0].ms, runs[1].ms, runs[2].ms, runs[3].ms}});
+    if (!dump_dir.empty() && (dump_frame_number == f || (dump_frame_number == 0 && n > dump.tests()))) dump = std::move(current);
   }
-  std::printf("\ntotal narrow phase: cubic %.1f ms, dnf %.1f ms, vincent %.1f ms, conservative %.1f ms\n", total[0], total[1],
-              total[2], total[3]);
-  std::printf("vincent is %.2fx faster than cubic and %.2fx than dnf; conservative costs %.2fx vincent\n", total[0] / total[2],
-              total[1] / total[2], total[3] / total[2]);
-  std::printf("vincent culled %.2f%% of %ld tests; %ld tests where cubic or dnf disagree with vincent%s\n",
-              tests ? 100.0 * culled_vincent / tests : 0.0, tests, disagreements,
-              check ? (", " + std::to_string(penetrations) + " penetrations over the run").c_str() : "");
+  if (measured.empty()) {
+    std::printf("no frame measured\n");
+    return 0;
+  }
+
+  // Totals over all measured frames, and over the heavy ones: at least a tenth of the most
+  // tests any measured frame had.
+  std::size_t most = 0;
+  for (const auto& m : measured) most = std::max(most, m.tests);
+  for (const bool heavy_only : {false, true}) {
+    double ms[4] = {0, 0, 0, 0};
+    std::size_t tests = 0, hits = 0, culled = 0, count = 0, least = SIZE_MAX;
+    for (const auto& m : measured) {
+      if (heavy_only && m.tests * 10 < most) continue;
+      ++count;
+      tests += m.tests, hits += m.hits, culled += m.culled_vincent, least = std::min(least, m.tests);
+      for (int k = 0; k < 4; ++k) ms[k] += m.ms[k];
+    }
+    std::printf("\n%s (%zu frames, %zu to %zu tests a frame, %zu in all):\n",
+                heavy_only ? "heavy frames, at least a tenth of the most tests" : "all measured frames", count, least,
+                most, tests);
+    std::printf("  narrow phase: cubic %.1f ms, dnf %.1f ms, vincent %.1f ms, conservative %.1f ms\n", ms[0], ms[1], ms[2],
+                ms[3]);
+    std::printf("  vincent %.2fx faster than cubic, %.2fx than dnf; conservative costs %.2fx vincent\n", ms[0] / ms[2],
+                ms[1] / ms[2], ms[3] / ms[2]);
+    std::printf("  vincent culled %.2f%% of all tests and %.2f%% of the tests with no collision (%zu hits)\n",
+                tests ? 100.0 * double(culled) / double(tests) : 0.0,
+                tests > hits ? 100.0 * double(culled) / double(tests - hits) : 0.0, hits);
+  }
+  std::printf("\n%ld tests where the methods disagree (cubic or dnf differ from vincent, or conservative misses one)%s\n",
+              disagreements, check ? (", " + std::to_string(penetrations) + " penetrating triangle pairs over the run").c_str() : "");
+  if (!dump_dir.empty()) {
+    if (dump.batches.empty()) {
+      std::fprintf(stderr, "scene_bench: frame %d was not measured; nothing dumped\n", dump_frame_number);
+      return 2;
+    }
+    try {
+      dump_frame(dump, dump_dir, fs::path(scene_path).stem().string() + "_frame" + std::to_string(dump.number), dump_limit);
+    } catch (const std::exception& e) {
+      std::fprintf(stderr, "scene_bench: %s\n", e.what());
+      return 2;
+    }
+  }
   return 0;
 }

@@ -131,4 +131,37 @@ QueryFile parse_query_text(const std::string& text, const std::filesystem::path&
   return file;
 }
 
+std::string format_query_text(const QueryFile& file) {
+  std::string text;
+  const auto append_row = [&](const Vec3& point, bool truth) {
+    for (int axis = 0; axis < 3; ++axis) {
+      const mpq_class value(point[axis]);  // exact: every finite double is a dyadic rational
+      text += value.get_num().get_str();
+      text += ',';
+      text += value.get_den().get_str();
+      text += ',';
+    }
+    text += truth ? "1\n" : "0\n";
+  };
+  for (std::size_t q = 0; q < file.queries.size(); ++q) {
+    const bool truth = q < file.truth.size() && file.truth[q];
+    for (const Vec3& p : file.queries[q].start) append_row(p, truth);
+    for (const Vec3& p : file.queries[q].end) append_row(p, truth);
+  }
+  return text;
+}
+
+void write_query_file(const std::filesystem::path& path, const QueryFile& file) {
+  std::filesystem::path temporary = path;
+  temporary += ".partial";
+  {
+    std::ofstream out(temporary, std::ios::binary);
+    out << format_query_text(file);
+    if (!out.flush()) fail(path, 0, "cannot write the file");
+  }
+  std::error_code error;
+  std::filesystem::rename(temporary, path, error);
+  if (error) fail(path, 0, "cannot write the file: " + error.message());
+}
+
 }  // namespace drape::ccd

@@ -49,6 +49,8 @@ TEST(GroundTruth, ReportEveryMethod) {
                 static_cast<unsigned long long>(row.queries), static_cast<unsigned long long>(row.positives),
                 static_cast<unsigned long long>(row.false_negatives),
                 static_cast<unsigned long long>(row.false_positives));
-    if (row.method == Method::Conservative) EXPECT_EQ(row.false_negatives, 0u) << row.kind;
+    if (row.method == Method::Conservative) {
+      EXPECT_EQ(row.false_negatives, 0u) << row.kind;
+    }
   }
 }

@@ -3,6 +3,7 @@
 
 #include <filesystem>
 #include <fstream>
+#include <random>
 
 #include "drape/ccd/query_file.h"
 
@@ -105,4 +106,35 @@ TEST(QueryFile, TrailingBlankLinesAndWindowsLineEndsAreAccepted) {
   for (int i = 0; i < 8; ++i) text += "0,1,0,1,0,1,0\r\n";
   const auto path = write_file("vertex-face", "crlf.csv", text + "\n\n");
   EXPECT_EQ(read_query_file(path).queries.size(), 1u);
+}
+
+// Written files read back to the same doubles and truths: the shared file, and doubles from
+// subnormal to huge with every bit of the mantissa in use.
+TEST(QueryFile, WrittenFilesReadBackExactly) {
+  QueryFile original = read_query_file(DRAPE_TEST_DATA "/ccd-queries/unit-tests/edge-edge/data_0_0.csv");
+  std::mt19937_64 rng(3);
+  std::uniform_real_distribution<double> mantissa(-1, 1);
+  std::uniform_int_distribution<int> exponent(-1060, 1000);
+  for (int q = 0; q < 50; ++q) {
+    Query query;
+    for (int i = 0; i < 4; ++i)
+      for (int k = 0; k < 3; ++k) {
+        query.start[i][k] = std::ldexp(mantissa(rng), exponent(rng));
+        query.end[i][k] = std::ldexp(mantissa(rng), exponent(rng));
+      }
+    original.queries.push_back(query);
+    original.truth.push_back(q % 3 == 0);
+  }
+  const fs::path path = write_file("edge-edge", "written.csv", "");
+  write_query_file(path, original);
+  const QueryFile back = read_query_file(path);
+  ASSERT_EQ(back.queries.size(), original.queries.size());
+  EXPECT_EQ(back.truth, original.truth);
+  for (std::size_t q = 0; q < back.queries.size(); ++q)
+    for (int i = 0; i < 4; ++i) {
+      EXPECT_EQ(back.queries[q].start[i], original.queries[q].start[i]) << "query " << q;
+      EXPECT_EQ(back.queries[q].end[i], original.queries[q].end[i]) << "query " << q;
+    }
+  EXPECT_NE(error_of(fs::path("/nonexistent-folder/edge-edge/x.csv")), "");
+  EXPECT_THROW(write_query_file("/nonexistent-folder/edge-edge/x.csv", original), QueryFileError);
 }

@@ -37,4 +37,12 @@ QueryFile read_query_file(const std::filesystem::path& path, std::optional<Query
 /// The same from the file's text; path names it in messages. Throws QueryFileError.
 QueryFile parse_query_text(const std::string& text, const std::filesystem::path& path, QueryKind kind);
 
+/// The file's queries as text in the same format, each coordinate written as the exact
+/// rational of its double (parse_query_text gives back the same doubles).
+std::string format_query_text(const QueryFile& file);
+
+/// Writes format_query_text(file) to path (through a temporary file renamed into place).
+/// Throws QueryFileError when it cannot be written.
+void write_query_file(const std::filesystem::path& path, const QueryFile& file);
+
 }  // namespace drape::ccd
