@@ -24,6 +24,7 @@ Command add_validate_command(CLI::App& app);
 Command add_check_stats_command(CLI::App& app);
 Command add_check_command(CLI::App& app);
 Command add_render_command(CLI::App& app);
+Command add_sweep_command(CLI::App& app);
 
 /// Options of a render, from drape render or drape run --render.
 struct RenderOptions {

@@ -20,6 +20,7 @@ PACKAGES=(
   libosmesa6-dev       # off-screen rendering
   libpng-dev           # PNG frames
   ffmpeg               # MP4 encoding
+  gnuplot-nox          # the time-against-error plot of drape sweep (PNG)
   clang libclang-rt-14-dev  # libFuzzer targets (tools/fuzz.sh)
 )
 

@@ -1,0 +1,153 @@
+// drape sweep: a scene over a grid of accuracy settings against a reference run (core/sweep.h).
+#include <cstdio>
+#include <iostream>
+
+#include "commands.h"
+#include "drape/core/sweep.h"
+
+namespace drape::app {
+namespace {
+
+struct SweepArguments {
+  std::string scene;
+  int frames = 30;
+  std::vector<int> steps;
+  std::vector<std::string> solvers{"cholmod", "cg:1e-3", "cg:1e-6"};
+  std::vector<std::string> methods{"vincent", "conservative"};
+  std::vector<double> thickness;
+  std::vector<int> impulses;
+  int reference_steps = 0;
+  std::string out;
+  bool plot = true;
+};
+
+int sweep(const SweepArguments& args) {
+  Scene scene;
+  try {
+    scene = load_scene(args.scene);
+  } catch (const SceneError& e) {
+    std::cerr << "drape sweep: " << e.what() << "\n";
+    return EXIT_BAD_INPUT;
+  }
+  SweepGrid grid;
+  grid.frame_steps = args.steps;
+  if (grid.frame_steps.empty())
+    grid.frame_steps = {std::max(1, scene.frame_steps / 2), scene.frame_steps, 2 * scene.frame_steps};
+  try {
+    for (const std::string& s : args.solvers) grid.solvers.push_back(parse_solver_setting(s, scene.solver));
+  } catch (const std::invalid_argument& e) {
+    std::cerr << "drape sweep: --solvers " << e.what() << "\n";
+    return EXIT_BAD_INPUT;
+  }
+  for (const std::string& m : args.methods) grid.methods.push_back(*ccd::parse_method(m));
+  for (double t : args.thickness) {
+    if (!(t >= 0 && t <= 1)) {
+      std::cerr << "drape sweep: --thickness: expected values from 0 to 1 m\n";
+      return EXIT_BAD_INPUT;
+    }
+    grid.thickness.push_back(t);
+  }
+  if (grid.thickness.empty()) grid.thickness = {scene.collisions.thickness};
+  grid.max_impulse_iterations = args.impulses;
+  if (grid.max_impulse_iterations.empty()) grid.max_impulse_iterations = {scene.collisions.max_impulse_iterations};
+
+  // The reference: the most accurate setting the knobs allow.
+  SweepSetting reference;
+  reference.frame_steps = args.reference_steps > 0
+                              ? args.reference_steps
+                              : 2 * *std::max_element(grid.frame_steps.begin(), grid.frame_steps.end());
+  reference.solver = scene.solver;
+  reference.solver.kind = SolverKind::Cholmod;
+  reference.method = ccd::Method::Conservative;
+  reference.thickness = scene.collisions.thickness;
+  reference.max_impulse_iterations =
+      std::max(scene.collisions.max_impulse_iterations,
+               *std::max_element(grid.max_impulse_iterations.begin(), grid.max_impulse_iterations.end()));
+
+  const std::string name = std::filesystem::path(args.scene).stem().string();
+  const std::filesystem::path out = args.out.empty() ? std::filesystem::path("out") / (name + "_sweep") : std::filesystem::path(args.out);
+  std::error_code error;
+  std::filesystem::create_directories(out, error);
+  if (error || !std::filesystem::is_directory(out)) {
+    std::cerr << "drape sweep: " << out.string() << ": cannot create the output folder\n";
+    return EXIT_BAD_INPUT;
+  }
+  const auto settings = grid.settings();
+  std::printf("drape sweep %s: %zu settings and the reference (%s), %d frames each\n", args.scene.c_str(),
+              settings.size(), reference.label().c_str(), args.frames);
+  std::fflush(stdout);
+  std::vector<SweepResult> results;
+  try {
+    results = run_sweep(scene, reference, settings, args.frames, [&](const SweepResult& r, std::size_t done, std::size_t total) {
+      std::printf("[%zu/%zu] %-62s %9.1f ms/frame  rms %.3e m  max %.3e m  pen %ld%s%s\n", done, total,
+                  (r.reference ? "reference " + r.setting.label() : r.setting.label()).c_str(), r.wall_ms_per_frame,
+                  r.rms_error, r.max_error, r.penetrations, r.failed ? "  FAILED: " : "", r.failure.c_str());
+      std::fflush(stdout);
+    });
+    write_sweep_csv(out / "sweep.csv", results);
+  } catch (const SceneError& e) {
+    std::cerr << "drape sweep: " << e.what() << "\n";
+    return EXIT_BAD_INPUT;
+  } catch (const std::runtime_error& e) {
+    std::cerr << "drape sweep: " << e.what() << "\n";
+    return EXIT_BAD_INPUT;
+  }
+  std::printf("\nPareto front (fastest first; no other run is both faster and closer to the reference):\n");
+  std::vector<const SweepResult*> front;
+  for (const SweepResult& r : results)
+    if (r.pareto) front.push_back(&r);
+  std::sort(front.begin(), front.end(), [](auto* a, auto* b) { return a->wall_ms_per_frame < b->wall_ms_per_frame; });
+  for (const SweepResult* r : front)
+    std::printf("  %-62s %9.1f ms/frame  rms %.3e m\n", r->setting.label().c_str(), r->wall_ms_per_frame, r->rms_error);
+  std::printf("table: %s\n", (out / "sweep.csv").c_str());
+  if (args.plot) {
+    const std::string why = plot_sweep(out / "sweep.png", results, "drape sweep " + name + ": time against error, " +
+                                                                       std::to_string(args.frames) + " frames");
+    if (why.empty()) std::printf("plot: %s\n", (out / "sweep.png").c_str());
+    else std::fprintf(stderr, "drape sweep: warning: no plot: %s (the table is written)\n", why.c_str());
+  }
+  return EXIT_OK;
+}
+
+}  // namespace
+
+Command add_sweep_command(CLI::App& app) {
+  auto args = std::make_shared<SweepArguments>();
+  CLI::App* cmd = app.add_subcommand(
+      "sweep",
+      "Run a scene over a grid of accuracy settings and compare each run with a reference at the most accurate "
+      "setting: time per frame, vertex error (RMS and max), energy, penetrations, failures. Writes sweep.csv and a "
+      "plot of time against error with the Pareto front (sweep.png, gnuplot).");
+  cmd->add_option("scene", args->scene, "Scene file (JSON)")->required()->check(CLI::ExistingFile);
+  cmd->add_option("--frames", args->frames, "Frames per run")->capture_default_str()->check(CLI::Range(1, 100000));
+  cmd->add_option("--steps", args->steps, "Steps per frame to try (default: half, once and twice the scene's)")
+      ->delimiter(',')
+      ->check(CLI::Range(1, 10000));
+  cmd->add_option("--solvers", args->solvers, "Solvers to try: cholmod, cg or cg:TOLERANCE")
+      ->delimiter(',')
+      ->capture_default_str();
+  cmd->add_option("--methods", args->methods, "CCD methods to try")
+      ->delimiter(',')
+      ->capture_default_str()
+      ->check(CLI::IsMember({"cubic", "dnf", "vincent", "conservative"}));
+  cmd->add_option("--thickness", args->thickness, "Collision thicknesses to try, m (default: the scene's)")
+      ->delimiter(',')
+      ->check(CLI::Range(0.0, 1.0));
+  cmd->add_option("--impulses", args->impulses, "max_impulse_iterations values to try (default: the scene's)")
+      ->delimiter(',')
+      ->check(CLI::Range(0, 1000));
+  cmd->add_option("--reference-steps", args->reference_steps,
+                  "Steps per frame of the reference run (default: twice the most tried); the reference also uses "
+                  "cholmod, the conservative CCD method and the scene's thickness")
+      ->check(CLI::Range(1, 100000));
+  cmd->add_option("--out", args->out, "Output folder (default: out/<scene>_sweep)");
+  cmd->add_flag("!--no-plot", args->plot, "Write the table only");
+  cmd->footer(
+      "Example:\n"
+      "  drape sweep scenes/cloth_fold.json --frames 30 --steps 5,10,20 --solvers cholmod,cg:1e-3,cg:1e-6\n"
+      "Runs that stop count as failed; a run is on the Pareto front when it did not fail, has no penetration, and no\n"
+      "other such run is both faster and closer to the reference. docs/sweep.md explains how to read the result.");
+  return [args] { return sweep(*args); };
+}
+
+}  // namespace drape::app

@@ -1,0 +1,43 @@
+// drape sweep end to end: the table, the plot, and bad flags.
+#include <gtest/gtest.h>
+
+#include <fstream>
+
+#include "drape_process.h"
+
+using namespace drape::testing;
+namespace fs = std::filesystem;
+
+TEST(SweepCommand, WritesTheTableAndThePlot) {
+  const fs::path out = fresh_temp_path("sweep", "small");
+  const Outcome run = run_drape("sweep " DRAPE_SOURCE_DIR "/scenes/hanging.json --frames 2 --steps 1,2 --solvers cholmod,cg:1e-4 "
+                                "--methods vincent --out " + out.string());
+  ASSERT_EQ(run.status, 0) << run.output;
+  EXPECT_NE(run.output.find("Pareto front"), std::string::npos) << run.output;
+  std::ifstream csv(out / "sweep.csv");
+  std::string line;
+  int lines = 0;
+  while (std::getline(csv, line)) ++lines;
+  EXPECT_EQ(lines, 1 + 1 + 4);  // header, reference, 2 x 2 settings
+  ASSERT_TRUE(fs::exists(out / "sweep.png"));
+  std::ifstream png(out / "sweep.png", std::ios::binary);
+  char magic[4] = {};
+  png.read(magic, 4);
+  EXPECT_EQ(std::string(magic + 1, 3), "PNG");
+}
+
+TEST(SweepCommand, BadFlagsNameTheFlag) {
+  const std::string scene = DRAPE_SOURCE_DIR "/scenes/hanging.json";
+  const Outcome solver = run_drape("sweep " + scene + " --solvers lu --no-plot --out " + fresh_temp_path("sweep", "a").string());
+  EXPECT_EQ(solver.status, 2);
+  EXPECT_NE(solver.output.find("--solvers 'lu': expected cholmod, cg or cg:TOLERANCE"), std::string::npos) << solver.output;
+  const Outcome method = run_drape("sweep " + scene + " --methods quartic");
+  EXPECT_EQ(method.status, 2);
+  EXPECT_NE(method.output.find("--methods"), std::string::npos) << method.output;
+  const Outcome steps = run_drape("sweep " + scene + " --steps 0");
+  EXPECT_EQ(steps.status, 2);
+  EXPECT_NE(steps.output.find("--steps"), std::string::npos) << steps.output;
+  const Outcome thickness = run_drape("sweep " + scene + " --thickness nan");
+  EXPECT_EQ(thickness.status, 2);
+  EXPECT_NE(thickness.output.find("--thickness"), std::string::npos) << thickness.output;
+}

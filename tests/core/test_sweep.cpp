@@ -1,0 +1,96 @@
+// The speed-accuracy sweep: the grid, the solver setting parser, the Pareto front, and runs
+// compared with the reference.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+
+#include "drape/core/sweep.h"
+
+using namespace drape;
+
+namespace {
+
+SweepResult result(double ms, double rms, bool failed = false, long penetrations = 0) {
+  SweepResult r;
+  r.wall_ms_per_frame = ms;
+  r.rms_error = rms;
+  r.failed = failed;
+  r.penetrations = penetrations;
+  return r;
+}
+
+}  // namespace
+
+TEST(Sweep, GridIsTheProductOfTheKnobs) {
+  SweepGrid grid;
+  grid.frame_steps = {5, 10, 20};
+  grid.solvers = {SolverSpec{}, SolverSpec{SolverKind::ConjugateGradient, 1e-4, 100}};
+  grid.methods = {ccd::Method::Vincent, ccd::Method::Conservative};
+  grid.thickness = {0.005};
+  grid.max_impulse_iterations = {4, 8};
+  const auto settings = grid.settings();
+  EXPECT_EQ(settings.size(), 3u * 2 * 2 * 1 * 2);
+  EXPECT_EQ(settings.front().label(), "steps=5 solver=cholmod ccd=vincent thickness=0.005 impulses=4");
+  EXPECT_EQ(settings.back().label(), "steps=20 solver=cg:0.0001 ccd=conservative thickness=0.005 impulses=8");
+}
+
+TEST(Sweep, SolverSettings) {
+  const SolverSpec scene{SolverKind::Cholmod, 1e-8, 500};
+  EXPECT_EQ(parse_solver_setting("cholmod", scene).kind, SolverKind::Cholmod);
+  const SolverSpec cg = parse_solver_setting("cg", scene);
+  EXPECT_EQ(cg.kind, SolverKind::ConjugateGradient);
+  EXPECT_EQ(cg.tolerance, 1e-8);
+  EXPECT_EQ(cg.max_iterations, 500);
+  EXPECT_EQ(parse_solver_setting("cg:1e-3", scene).tolerance, 1e-3);
+  for (const char* bad : {"lu", "cg:", "cg:abc", "cg:0", "cg:2", "cg:1e-3x", "cholmod:1"}) {
+    try {
+      parse_solver_setting(bad, scene);
+      ADD_FAILURE() << bad << " accepted";
+    } catch (const std::invalid_argument& e) {
+      EXPECT_NE(std::string(e.what()).find(bad), std::string::npos) << e.what();
+    }
+  }
+}
+
+TEST(Sweep, ParetoFrontKeepsRunsNoOtherBeatsOnBoth) {
+  std::vector<SweepResult> r{result(10, 1.0), result(20, 0.5), result(30, 0.6), result(40, 0.1),
+                             result(5, 0.01, /*failed=*/true), result(6, 0.01, false, /*penetrations=*/3),
+                             result(10, 1.0), result(50, 0.1)};
+  r.push_back(result(1, 0));
+  r.back().reference = true;
+  mark_pareto_front(r);
+  const std::vector<bool> expected{true, true, false, true, false, false, true, false, false};
+  for (std::size_t i = 0; i < r.size(); ++i) EXPECT_EQ(r[i].pareto, expected[i]) << "run " << i;
+}
+
+// A run at the reference's own setting matches it exactly (the simulation is deterministic);
+// fewer steps per frame move the cloth elsewhere.
+TEST(Sweep, RunsAreMeasuredAgainstTheReference) {
+  const Scene scene = load_scene(DRAPE_SOURCE_DIR "/scenes/hanging.json");
+  SweepSetting reference;
+  reference.frame_steps = 4;
+  reference.method = ccd::Method::Conservative;
+  SweepSetting coarse = reference;
+  coarse.frame_steps = 1;
+  std::size_t calls = 0;
+  const auto results = run_sweep(scene, reference, {reference, coarse}, 3, [&](const SweepResult&, std::size_t done, std::size_t total) {
+    ++calls;
+    EXPECT_EQ(done, calls);
+    EXPECT_EQ(total, 3u);
+  });
+  ASSERT_EQ(results.size(), 3u);
+  EXPECT_TRUE(results[0].reference);
+  for (const auto& r : results) {
+    EXPECT_FALSE(r.failed) << r.failure;
+    EXPECT_EQ(r.frames_done, 3);
+    EXPECT_GT(r.wall_ms_per_frame, 0);
+  }
+  EXPECT_EQ(results[1].rms_error, 0.0);
+  EXPECT_EQ(results[1].max_error, 0.0);
+  EXPECT_GT(results[2].rms_error, 1e-6);
+  EXPECT_GE(results[2].max_error, results[2].rms_error);
+  EXPECT_GT(results[2].energy_error, 0.0);
+  EXPECT_LT(results[0].energy_drift, 0.0);  // a swinging cloth falls: its energy goes to kinetic, then damping
+  const std::string row = sweep_csv_row(results[2]), header = sweep_csv_header();
+  EXPECT_EQ(std::count(row.begin(), row.end(), ','), std::count(header.begin(), header.end(), ','));
+}
