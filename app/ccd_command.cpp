@@ -1,5 +1,7 @@
 // drape ccd: the CCD methods on query files with ground truth.
 #include <algorithm>
+#include <cmath>
+#include <cstdlib>
 #include <cstdio>
 #include <filesystem>
 #include <iostream>
@@ -22,15 +24,32 @@ struct CcdArguments {
   ccd::EvaluationSettings settings;
 };
 
+// CLI11's ranges let NaN through (every comparison with it is false), and a tolerance or
+// thickness must be a finite number.
+const CLI::Validator FINITE_NUMBER(
+    [](std::string& input) {
+      char* end = nullptr;
+      const double value = std::strtod(input.c_str(), &end);
+      if (input.empty() || *end != '\0' || !std::isfinite(value)) return "expected a finite number, found '" + input + "'";
+      return std::string();
+    },
+    "FINITE");
+
 // Files named on the command line; a folder stands for every .csv file below it, in name order.
 std::vector<fs::path> expand_inputs(const std::vector<std::string>& inputs) {
   std::vector<fs::path> files;
   for (const auto& input : inputs) {
     const fs::path path(input);
-    if (fs::is_directory(path)) {
+    std::error_code error;
+    if (fs::is_directory(path, error)) {
       std::vector<fs::path> found;
-      for (const auto& entry : fs::recursive_directory_iterator(path))
-        if (entry.is_regular_file() && entry.path().extension() == ".csv") found.push_back(entry.path());
+      try {
+        for (const auto& entry : fs::recursive_directory_iterator(path))
+          if (entry.is_regular_file() && entry.path().extension() == ".csv") found.push_back(entry.path());
+      } catch (const fs::filesystem_error& e) {  // e.g. a subfolder that may not be read
+        const fs::path where = e.path1().empty() ? path : e.path1();
+        throw ccd::QueryFileError(where.string() + ": cannot list the folder: " + e.code().message());
+      }
       if (found.empty()) throw ccd::QueryFileError(input + ": the folder holds no .csv query file");
       std::sort(found.begin(), found.end());
       files.insert(files.end(), found.begin(), found.end());
@@ -129,13 +148,16 @@ Command add_ccd_command(CLI::App& app) {
       ->capture_default_str();
   auto& o = args->settings.options;
   cmd->add_option("--thickness", o.thickness, "Minimum separation counted as contact (scene units)")
+      ->check(FINITE_NUMBER)
       ->check(CLI::NonNegativeNumber)
       ->capture_default_str();
   cmd->add_option("--contact-tolerance", o.contact_tolerance,
                   "cubic/dnf/vincent: distance at a root counted as contact, relative to the query's extent")
+      ->check(FINITE_NUMBER)
       ->check(CLI::NonNegativeNumber)
       ->capture_default_str();
   cmd->add_option("--root-tolerance", o.root_tolerance, "Width at which a root bracket is final (step units)")
+      ->check(FINITE_NUMBER)
       ->check(CLI::PositiveNumber)
       ->capture_default_str();
   cmd->add_option("--max-subdivision-depth", o.max_subdivision_depth,
@@ -144,6 +166,7 @@ Command add_ccd_command(CLI::App& app) {
       ->capture_default_str();
   cmd->add_option("--time-tolerance", o.time_tolerance,
                   "conservative: interval width reported as contact when nothing excludes it (step units)")
+      ->check(FINITE_NUMBER)
       ->check(CLI::PositiveNumber)
       ->capture_default_str();
   cmd->add_option("--max-intervals", o.max_intervals,

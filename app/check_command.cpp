@@ -1,5 +1,6 @@
 // drape check: the independent penetration check over every saved frame of a run.
 #include <iostream>
+#include <limits>
 
 #include "commands.h"
 #include "drape/core/mesh_io.h"
@@ -21,7 +22,13 @@ int check(const std::string& folder_name, std::size_t max_pairs) {
     std::cerr << "drape check: " << e.what() << "\n";
     return EXIT_BAD_INPUT;
   }
-  const auto frames = run_folder_frames(folder);
+  std::vector<std::pair<int, fs::path>> frames;
+  try {
+    frames = run_folder_frames(folder);
+  } catch (const RunFolderError& e) {
+    std::cerr << "drape check: " << e.what() << "\n";
+    return EXIT_BAD_INPUT;
+  }
   if (frames.empty()) {
     std::cerr << "drape check: " << folder.string() << ": no frame_*.* meshes\n";
     return EXIT_BAD_INPUT;
@@ -50,7 +57,7 @@ int check(const std::string& folder_name, std::size_t max_pairs) {
 
 Command add_check_command(CLI::App& app) {
   auto folder = std::make_shared<std::string>();
-  auto limit = std::make_shared<std::size_t>(1000);
+  auto limit = std::make_shared<int>(1000);
   CLI::App* cmd = app.add_subcommand("check", "Check every saved frame of a run for intersecting triangles.");
   cmd->footer(
       "Tests every pair of non-adjacent cloth triangles, cloth against mesh obstacles, and cloth\n"
@@ -58,8 +65,12 @@ Command add_check_command(CLI::App& app) {
       "frames and pairs that intersect; exit status 1 when any do, 0 when none, 2 on bad input.\n\n"
       "Example:\n  drape run scenes/cloth_fold.json && drape check out/cloth_fold");
   cmd->add_option("folder", *folder, "A run's output folder")->required()->check(CLI::ExistingDirectory);
-  cmd->add_option("--max-pairs", *limit, "Pairs to look for per frame before moving on")->capture_default_str();
-  return [folder, limit] { return check(*folder, *limit); };
+  // At least one pair: with none to look for, every frame would pass unchecked. An int range,
+  // since CLI11 wraps a negative value into a huge unsigned one.
+  cmd->add_option("--max-pairs", *limit, "Pairs to look for per frame before moving on")
+      ->check(CLI::Range(1, std::numeric_limits<int>::max()))
+      ->capture_default_str();
+  return [folder, limit] { return check(*folder, std::size_t(*limit)); };
 }
 
 }  // namespace drape::app

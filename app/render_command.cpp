@@ -27,7 +27,13 @@ int render_run(const fs::path& folder, const RenderOptions& options) {
     return EXIT_BAD_INPUT;
   }
   if (options.width > 0) settings.width = options.width, settings.height = options.height;
-  const auto frames = run_folder_frames(folder);
+  std::vector<std::pair<int, fs::path>> frames;
+  try {
+    frames = run_folder_frames(folder);
+  } catch (const RunFolderError& e) {
+    std::cerr << "drape render: " << e.what() << "\n";
+    return EXIT_BAD_INPUT;
+  }
   if (frames.empty()) {
     std::cerr << "drape render: " << folder.string() << ": no frame_*.* meshes to render\n";
     return EXIT_BAD_INPUT;

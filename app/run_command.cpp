@@ -90,6 +90,13 @@ int run(const RunArguments& args) {
     std::cerr << "drape run: " << e.what() << "\n";
     return EXIT_BAD_INPUT;
   }
+  // So is the --resolution flag.
+  RenderOptions render_options;
+  render_options.quiet = args.quiet;
+  if (!args.resolution.empty() && !parse_resolution(args.resolution, render_options)) {
+    std::cerr << "drape run: --resolution: expected WIDTHxHEIGHT from 16x16 to 8192x8192, found '" << args.resolution << "'\n";
+    return EXIT_BAD_INPUT;
+  }
   RunSettings settings;
   settings.out = args.out.empty() ? scene.output.folder : std::filesystem::path(args.out);
   settings.frames = args.frames > 0 ? args.frames : scene.frames;
@@ -121,15 +128,7 @@ int run(const RunArguments& args) {
   if (!args.quiet)
     std::cerr << "drape run: done: " << outcome.frames_done << " frames; meshes and stats.csv in " << settings.out.string()
               << "/\n";
-  if (args.render || wants_render) {
-    RenderOptions options;
-    options.quiet = args.quiet;
-    if (!args.resolution.empty() && !parse_resolution(args.resolution, options)) {
-      std::cerr << "drape run: --resolution: expected WIDTHxHEIGHT from 16x16 to 8192x8192\n";
-      return EXIT_BAD_INPUT;
-    }
-    return render_run(settings.out, options);
-  }
+  if (args.render || wants_render) return render_run(settings.out, render_options);
   return EXIT_OK;
 }
 
@@ -173,6 +172,13 @@ Command add_validate_command(CLI::App& app) {
   return [scene] {
     const std::optional<Model> model = load_model(*scene, "validate");
     if (!model) return EXIT_BAD_INPUT;
+    // The render section too, with the parser drape run uses.
+    try {
+      render::parse_render_settings(model->scene);
+    } catch (const render::RenderError& e) {
+      std::cerr << "drape validate: " << e.what() << "\n";
+      return EXIT_BAD_INPUT;
+    }
     std::cout << *scene << ": valid: " << model->cloths.size() << " cloth(s), " << model->vertex_count() << " vertices, "
               << model->triangles.size() << " triangles, " << model->springs.size() << " springs, " << model->pins.size()
               << " pinned vertices, " << model->obstacles.size() << " obstacle(s); " << model->scene.frames

@@ -1,9 +1,15 @@
 #pragma once
 // A run's output folder: its scene copy and its saved frames (shared by check and render).
+#include <algorithm>
+#include <charconv>
 #include <filesystem>
 #include <fstream>
+#include <limits>
 #include <regex>
 #include <sstream>
+#include <stdexcept>
+#include <string>
+#include <system_error>
 #include <utility>
 #include <vector>
 
@@ -11,30 +17,54 @@
 
 namespace drape::app {
 
+/// A run folder whose frames cannot be listed. what() names the folder or file and the problem.
+class RunFolderError : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
 /// The run's scene: its copy, read as if from where it came so that mesh paths resolve.
 inline Scene run_folder_scene(const std::filesystem::path& folder) {
   const std::filesystem::path copy = folder / "scene.json";
-  if (!std::filesystem::exists(copy)) throw SceneError(copy.string() + ": not found: is this a drape run folder?");
+  std::error_code error;
+  const bool found = std::filesystem::exists(copy, error);
+  if (error) throw SceneError(copy.string() + ": cannot look for the scene copy: " + error.message());
+  if (!found) throw SceneError(copy.string() + ": not found: is this a drape run folder?");
   std::ifstream in(copy);
+  if (!in) throw SceneError(copy.string() + ": cannot open the scene copy");
   std::stringstream text;
   text << in.rdbuf();
   std::filesystem::path origin = copy;
   if (std::ifstream where{folder / "scene_path.txt"}; where) {
     std::string line;
     std::getline(where, line);
-    if (!line.empty() && std::filesystem::exists(line)) origin = line;
+    if (!line.empty() && std::filesystem::exists(line, error)) origin = line;
   }
   return parse_scene(text.str(), origin);
 }
 
-/// The saved frames frame_NNNNN.<mesh extension>, by frame number.
+/// The saved frames frame_NNNNN.<mesh extension>, by frame number. Throws RunFolderError when
+/// the folder cannot be listed or a frame number does not fit an int.
 inline std::vector<std::pair<int, std::filesystem::path>> run_folder_frames(const std::filesystem::path& folder) {
   std::vector<std::pair<int, std::filesystem::path>> frames;
   const std::regex name(R"(frame_(\d+)\.(obj|ply|stl|gltf|glb|dae))");
-  for (const auto& entry : std::filesystem::directory_iterator(folder)) {
-    std::smatch match;
-    const std::string file = entry.path().filename().string();
-    if (std::regex_match(file, match, name)) frames.emplace_back(std::stoi(match[1]), entry.path());
+  try {
+    for (const auto& entry : std::filesystem::directory_iterator(folder)) {
+      std::smatch match;
+      const std::string file = entry.path().filename().string();
+      if (!std::regex_match(file, match, name)) continue;
+      // from_chars, not stoi: a number too large for an int is bad input, not an abort.
+      const std::string digits = match[1];
+      int frame = 0;
+      const auto [end, problem] = std::from_chars(digits.data(), digits.data() + digits.size(), frame);
+      if (problem != std::errc() || end != digits.data() + digits.size())
+        throw RunFolderError(entry.path().string() + ": expected a frame number from 0 to " +
+                             std::to_string(std::numeric_limits<int>::max()) + ", found " + digits);
+      frames.emplace_back(frame, entry.path());
+    }
+  } catch (const std::filesystem::filesystem_error& e) {
+    const std::filesystem::path where = e.path1().empty() ? folder : e.path1();
+    throw RunFolderError(where.string() + ": cannot list the run's frames: " + e.code().message());
   }
   std::sort(frames.begin(), frames.end());
   return frames;

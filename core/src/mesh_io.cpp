@@ -5,6 +5,7 @@
 #include <assimp/postprocess.h>
 #include <assimp/scene.h>
 
+#include <cmath>
 #include <map>
 
 namespace drape {
@@ -27,6 +28,13 @@ TriangleMesh load_mesh(const std::filesystem::path& path) {
     std::vector<int> index(part->mNumVertices);
     for (unsigned v = 0; v < part->mNumVertices; ++v) {
       const aiVector3D& p = part->mVertices[v];
+      // A NaN compares equal to anything in the map and would be welded away: keep a
+      // non-finite vertex apart, for mesh_problem to report.
+      if (!std::isfinite(p.x) || !std::isfinite(p.y) || !std::isfinite(p.z)) {
+        index[v] = int(mesh.vertices.size());
+        mesh.vertices.emplace_back(p.x, p.y, p.z);
+        continue;
+      }
       const std::array<Scalar, 3> key{p.x, p.y, p.z};
       const auto [it, inserted] = welded.emplace(key, int(mesh.vertices.size()));
       if (inserted) mesh.vertices.emplace_back(p.x, p.y, p.z);
@@ -47,22 +55,26 @@ std::vector<Vec3> load_frame_positions(const std::filesystem::path& path, const 
   const aiScene* scene = importer.ReadFile(path.string(), aiProcess_Triangulate);
   if (!scene || !scene->mRootNode) throw MeshFileError(path.string() + ": cannot read the mesh: " + importer.GetErrorString());
   std::vector<Vec3> positions(topology.vertices.size(), Vec3::Zero());
-  std::size_t face = 0;
+  std::size_t face = 0;  // every triangle of the file is counted, those beyond the topology too
   for (unsigned m = 0; m < scene->mNumMeshes; ++m) {
     const aiMesh* part = scene->mMeshes[m];
     for (unsigned f = 0; f < part->mNumFaces; ++f) {
-      if (part->mFaces[f].mNumIndices != 3) continue;
-      if (face >= topology.triangles.size()) break;
-      for (int k = 0; k < 3; ++k) {
-        const aiVector3D& p = part->mVertices[part->mFaces[f].mIndices[k]];
-        positions[topology.triangles[face][k]] = Vec3(p.x, p.y, p.z);
+      if (part->mFaces[f].mNumIndices != 3) continue;  // points and lines
+      if (face < topology.triangles.size()) {
+        for (int k = 0; k < 3; ++k) {
+          const aiVector3D& p = part->mVertices[part->mFaces[f].mIndices[k]];
+          positions[topology.triangles[face][k]] = Vec3(p.x, p.y, p.z);
+        }
       }
       ++face;
     }
   }
-  if (face != topology.triangles.size() || scene->mNumMeshes == 0)
-    throw MeshFileError(path.string() + ": expected " + std::to_string(topology.triangles.size()) +
-                        " triangles (the scene's cloth), found " + std::to_string(face));
+  if (face != topology.triangles.size())
+    throw MeshFileError(path.string() + ": expected " + std::to_string(topology.triangles.size()) + " triangles, found " +
+                        std::to_string(face));
+  for (std::size_t v = 0; v < positions.size(); ++v)
+    if (!positions[v].allFinite())
+      throw MeshFileError(path.string() + ": vertex " + std::to_string(v) + " has a non-finite coordinate");
   return positions;
 }
 

@@ -7,6 +7,8 @@
 #include <set>
 #include <sstream>
 
+#include "drape/core/mesh_io.h"
+
 namespace drape {
 
 Vec3 Transform::apply(const Vec3& x) const {
@@ -160,6 +162,8 @@ Transform read_transform(const Node& n) {
     t.rotate_degrees = r.at(std::size_t(0)).number();
     t.rotate_axis = Vec3(r.at(1).number(), r.at(2).number(), r.at(3).number());
     if (!(t.rotate_axis.norm() > 0)) r.fail("the rotation axis must not be zero");
+    // A length beyond a double's range normalises to zero or NaN.
+    if (!std::isfinite(t.rotate_axis.norm())) r.fail("expected a rotation axis of finite length, found " + describe(r.raw()));
   }
   if (n.has("scale")) t.scale = n.at("scale").positive();
   return t;
@@ -257,6 +261,8 @@ ObstacleSpec read_obstacle(const Node& n) {
     if (p.has("point")) o.point = p.at("point").vec3();
     if (p.has("normal")) o.normal = p.at("normal").vec3();
     if (!(o.normal.norm() > 0)) p.at("normal").fail("the normal must not be zero");
+    // A length beyond a double's range normalises to zero or NaN.
+    if (!std::isfinite(o.normal.norm())) p.at("normal").fail("expected a normal of finite length, found " + describe(p.at("normal").raw()));
     o.normal.normalize();
   } else {
     o.kind = ObstacleSpec::Kind::Mesh;
@@ -268,6 +274,36 @@ ObstacleSpec read_obstacle(const Node& n) {
   }
   if (n.has("motion")) o.motion = read_motion(n.at("motion"));
   return o;
+}
+
+// The run stops as soon as a cloth vertex is outside the bounds, so a box that leaves out a
+// cloth's start would stop every run at its first step. A grid's extreme vertices are its four
+// corners (computed as make_grid does; the transform is affine and the box convex); a mesh's
+// are all its vertices, read once more here. A mesh that cannot be read, or a non-finite
+// vertex, is left for build_model to report with its own message.
+void check_bounds_hold_cloths(const Node& n, const Box& bounds, const std::vector<ClothSpec>& cloths) {
+  for (std::size_t c = 0; c < cloths.size(); ++c) {
+    const ClothSpec& cloth = cloths[c];
+    std::vector<Vec3> extremes;
+    if (cloth.grid) {
+      for (const Scalar u : {0.0, 1.0})
+        for (const Scalar v : {0.0, 1.0})
+          extremes.emplace_back(cloth.grid->size.x() * (u - 0.5), cloth.grid->size.y() * (v - 0.5), 0.0);
+    } else {
+      try {
+        extremes = load_mesh(cloth.mesh_file).vertices;
+      } catch (const MeshFileError&) {
+      }
+    }
+    for (const Vec3& x : extremes) {
+      const Vec3 start = cloth.transform.apply(x);
+      if (!start.allFinite() || bounds.contains(start)) continue;
+      std::ostringstream where;
+      where << "expected a box holding every cloth's initial position; cloth " << c << " has a vertex at (" << start.x()
+            << ", " << start.y() << ", " << start.z() << ") outside it";
+      n.fail(where.str());
+    }
+  }
 }
 
 // Line and column of a byte offset, for JSON syntax errors.
@@ -364,7 +400,10 @@ Scene parse_scene(const std::string& text, const std::filesystem::path& file) {
     if (o.has("meshes")) s.output.meshes = o.at("meshes").boolean();
   }
   if (s.output.folder.empty()) s.output.folder = std::filesystem::path("out") / file.stem();
-  if (n.has("bounds")) s.bounds = read_box(n.at("bounds"));
+  if (n.has("bounds")) {
+    s.bounds = read_box(n.at("bounds"));
+    check_bounds_hold_cloths(n.at("bounds"), *s.bounds, s.cloths);
+  }
   if (n.has("render")) {
     const Node r = n.at("render");
     if (!r.raw().is_object()) r.fail("expected an object");

@@ -37,13 +37,20 @@ std::vector<std::vector<std::string>> read_csv(const std::filesystem::path& path
   std::ifstream in(path);
   if (!in) throw std::runtime_error(path.string() + ": cannot open the statistics file");
   std::vector<std::vector<std::string>> rows;
+  std::size_t line_number = 0;
   for (std::string line; std::getline(in, line);) {
+    ++line_number;
     if (!line.empty() && line.back() == '\r') line.pop_back();
     if (line.empty()) continue;
     std::vector<std::string> cells;
     std::stringstream stream(line);
     for (std::string cell; std::getline(stream, cell, ',');) cells.push_back(cell);
     if (line.back() == ',') cells.emplace_back();
+    // A row shorter or longer than the header is a damaged file, not a row of empty values.
+    if (!rows.empty() && cells.size() != rows[0].size())
+      throw std::runtime_error(path.string() + ": line " + std::to_string(line_number) + ": expected " +
+                               std::to_string(rows[0].size()) + " comma-separated cells as in the header, found " +
+                               std::to_string(cells.size()));
     rows.push_back(cells);
   }
   if (rows.empty()) throw std::runtime_error(path.string() + ": the statistics file is empty");

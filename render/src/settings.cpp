@@ -1,6 +1,8 @@
 #include <nlohmann/json.hpp>
 
 #include <cmath>
+#include <cstdint>
+#include <limits>
 
 #include "drape/render/renderer.h"
 
@@ -23,6 +25,14 @@ double number(const Scene& scene, const json& v, const std::string& path) {
   return v.get<double>();
 }
 
+// An integer as a long long: get<int> would wrap 4294967312 into 16, so a value beyond the
+// range of a long long saturates instead and meets the caller's range check.
+long long integer(const json& v) {
+  if (v.is_number_unsigned() && v.get<std::uint64_t>() > std::uint64_t(std::numeric_limits<long long>::max()))
+    return std::numeric_limits<long long>::max();
+  return v.get<long long>();
+}
+
 Vec3 vec3(const Scene& scene, const json& v, const std::string& path) {
   if (!v.is_array() || v.size() != 3) fail(scene, path, "expected an array of 3 numbers, found " + v.dump());
   return Vec3(number(scene, v[0], path + "/0"), number(scene, v[1], path + "/1"), number(scene, v[2], path + "/2"));
@@ -41,16 +51,17 @@ RenderSettings parse_render_settings(const Scene& scene) {
     const json& v = r["resolution"];
     if (!v.is_array() || v.size() != 2 || !v[0].is_number_integer() || !v[1].is_number_integer())
       fail(scene, "/resolution", "expected [width, height] in pixels, found " + v.dump());
-    s.width = v[0].get<int>();
-    s.height = v[1].get<int>();
-    if (s.width < MIN_SIZE || s.height < MIN_SIZE || s.width > MAX_SIZE || s.height > MAX_SIZE)
+    const long long width = integer(v[0]), height = integer(v[1]);
+    if (width < MIN_SIZE || height < MIN_SIZE || width > MAX_SIZE || height > MAX_SIZE)
       fail(scene, "/resolution", "expected each side from 16 to 8192 pixels, found " + v.dump());
+    s.width = int(width);
+    s.height = int(height);
   }
   if (r.contains("samples")) {
     const json& v = r["samples"];
-    if (!v.is_number_integer() || v.get<int>() < 1 || v.get<int>() > MAX_SAMPLES)
+    if (!v.is_number_integer() || integer(v) < 1 || integer(v) > MAX_SAMPLES)
       fail(scene, "/samples", "expected an integer from 1 to 4 (supersampling per axis), found " + v.dump());
-    s.samples = v.get<int>();
+    s.samples = int(integer(v));
   }
   if (double(s.width) * s.height * s.samples * s.samples > MAX_SUPERSAMPLED_PIXELS)
     fail(scene, "/resolution", "resolution times samples squared exceeds 64 million pixels; lower one of them");

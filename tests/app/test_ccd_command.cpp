@@ -87,11 +87,72 @@ TEST(CcdCommand, BadInputExitsWithStatusTwo) {
   EXPECT_EQ(bad.status, 2);
   EXPECT_NE(bad.output.find((dir / "bad.csv").string() + ":2:"), std::string::npos) << bad.output;
 
-  EXPECT_EQ(run_drape("ccd /nonexistent.csv").status, 2);
-  EXPECT_EQ(run_drape("ccd --method quartic " + data("unit-tests")).status, 2);
-  EXPECT_EQ(run_drape("ccd --passes 0 " + data("unit-tests")).status, 2);
-  EXPECT_EQ(run_drape("ccd").status, 2);
+  // Each message names what was wrong: the path, the flag.
+  const Outcome missing = run_drape("ccd /nonexistent.csv");
+  EXPECT_EQ(missing.status, 2);
+  EXPECT_NE(missing.output.find("/nonexistent.csv"), std::string::npos) << missing.output;
+  const Outcome method = run_drape("ccd --method quartic " + data("unit-tests"));
+  EXPECT_EQ(method.status, 2);
+  EXPECT_NE(method.output.find("--method"), std::string::npos) << method.output;
+  const Outcome passes = run_drape("ccd --passes 0 " + data("unit-tests"));
+  EXPECT_EQ(passes.status, 2);
+  EXPECT_NE(passes.output.find("--passes"), std::string::npos) << passes.output;
+  const Outcome depth = run_drape("ccd --max-subdivision-depth 61 " + data("unit-tests"));
+  EXPECT_EQ(depth.status, 2);
+  EXPECT_NE(depth.output.find("--max-subdivision-depth"), std::string::npos) << depth.output;
+  const Outcome negative = run_drape("ccd --thickness -1 " + data("unit-tests"));
+  EXPECT_EQ(negative.status, 2);
+  EXPECT_NE(negative.output.find("--thickness"), std::string::npos) << negative.output;
+  const Outcome kind = run_drape("ccd --kind face-face " + data("unit-tests"));
+  EXPECT_EQ(kind.status, 2);
+  EXPECT_NE(kind.output.find("--kind"), std::string::npos) << kind.output;
+  const Outcome no_files = run_drape("ccd");
+  EXPECT_EQ(no_files.status, 2);
+  EXPECT_NE(no_files.output.find("files"), std::string::npos) << no_files.output;
   EXPECT_EQ(run_drape("frobnicate").status, 2);
-  const Outcome no_kind = run_drape("ccd " + fs::temp_directory_path().string() + "/../" + (dir / "bad.csv").string());
+}
+
+TEST(CcdCommand, FloatFlagsMustBeFinite) {
+  // CLI11's ranges let NaN through; every float flag rejects it, and infinities, by name.
+  for (const char* flag : {"--thickness", "--contact-tolerance", "--root-tolerance", "--time-tolerance"}) {
+    for (const char* value : {"nan", "NaN", "inf"}) {
+      const Outcome run = run_drape(std::string("ccd --passes 1 ") + flag + " " + value + " " + data("unit-tests/edge-edge/data_0_1.csv"));
+      EXPECT_EQ(run.status, 2) << flag << " " << value << ": " << run.output;
+      EXPECT_NE(run.output.find(std::string(flag) + ": expected a finite number"), std::string::npos) << flag << " " << value << ": " << run.output;
+    }
+  }
+  EXPECT_EQ(run_drape("ccd --passes 1 --thickness 0.001 " + data("unit-tests/edge-edge/data_0_1.csv")).status, 0);
+}
+
+TEST(CcdCommand, AFileOutsideAKindFolderNeedsKind) {
+  // A copy of a good file in a folder whose path names no kind.
+  const fs::path dir = drape::testing::fresh_temp_path("ccd_command", "no_kind");
+  fs::create_directories(dir);
+  const fs::path file = dir / "queries.csv";
+  fs::copy_file(data("unit-tests/edge-edge/data_0_1.csv"), file);
+  const Outcome no_kind = run_drape("ccd --passes 1 " + file.string());
   EXPECT_EQ(no_kind.status, 2);
+  EXPECT_NE(no_kind.output.find(file.string() + ":0: cannot tell the query kind"), std::string::npos) << no_kind.output;
+  EXPECT_EQ(run_drape("ccd --passes 1 --kind edge-edge " + file.string()).status, 0);
+}
+
+TEST(CcdCommand, AFolderWithoutQueryFilesIsBadInput) {
+  const fs::path empty = drape::testing::fresh_temp_path("ccd_command", "empty");
+  fs::create_directories(empty);
+  const Outcome run = run_drape("ccd " + empty.string());
+  EXPECT_EQ(run.status, 2);
+  EXPECT_NE(run.output.find(empty.string() + ": the folder holds no .csv query file"), std::string::npos) << run.output;
+}
+
+TEST(CcdCommand, AnUnreadableSubfolderIsReportedNotThrown) {
+  if (::geteuid() == 0) GTEST_SKIP() << "root reads every folder";
+  const fs::path top = drape::testing::fresh_temp_path("ccd_command", "unreadable");
+  fs::create_directories(top / "locked");
+  fs::copy_file(data("unit-tests/edge-edge/data_0_1.csv"), top / "edge-edge.csv");
+  fs::permissions(top / "locked", fs::perms::none);
+  const Outcome run = run_drape("ccd --kind edge-edge " + top.string());
+  fs::permissions(top / "locked", fs::perms::owner_all);
+  EXPECT_EQ(run.status, 2);
+  EXPECT_NE(run.output.find(top.string()), std::string::npos) << run.output;  // the folder, or the subfolder in it
+  EXPECT_NE(run.output.find(": cannot list the folder: "), std::string::npos) << run.output;
 }

@@ -91,6 +91,7 @@ TEST(QueryFile, MalformedFilesNameTheFileAndLine) {
       {"blank.csv", rows(3) + "\n" + rows(5), ":4: empty line"},
       {"empty.csv", "", ":1: the file is empty"},
       {"empty_field.csv", rows(7) + "0,1,0,1,0,,0\n", ":8: column 6: expected an integer, found ''"},
+      {"huge.csv", "1" + std::string(400, '0') + ",1,0,1,0,1,0\n" + rows(7), ":1: column 1: value out of the range of a double"},
   };
   for (const Case& c : cases) {
     const auto path = write_file("vertex-face", c.name, c.text);

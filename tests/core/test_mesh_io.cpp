@@ -49,3 +49,52 @@ TEST(Mesh, TopologyOfAGrid) {
   EXPECT_EQ(springs.shear.size(), 12u);
   EXPECT_EQ(springs.bend.size(), 2u * 3 + 4);  // along x: 2 in each of 3 rows; along y: 1 in each of 4 columns
 }
+
+TEST(MeshIo, FramesMustMatchTheMeshAndBeFinite) {
+  const fs::path dir = fs::temp_directory_path() / ("drape_mesh_io_" + std::to_string(::getpid()));
+  fs::create_directories(dir);
+  const GridMesh grid = make_grid({Vec2(1, 1), {2, 2}, GridDiagonals::Alternate});
+  const fs::path good = dir / "frame_good.obj";
+  save_mesh(good, grid.mesh, "obj");
+  EXPECT_EQ(load_frame_positions(good, grid.mesh).size(), grid.mesh.vertices.size());
+  const auto error_of = [&](const fs::path& path) {
+    try {
+      load_frame_positions(path, grid.mesh);
+    } catch (const MeshFileError& e) {
+      return std::string(e.what());
+    }
+    return std::string();
+  };
+  // One triangle more than the mesh: every triangle of the file is counted.
+  const fs::path extra = dir / "frame_extra.obj";
+  fs::copy_file(good, extra, fs::copy_options::overwrite_existing);
+  std::ofstream(extra, std::ios::app) << "\nf 1 2 3\n";
+  EXPECT_NE(error_of(extra).find(extra.string() + ": expected 8 triangles, found 9"), std::string::npos) << error_of(extra);
+  // A NaN coordinate.
+  std::ifstream in(good);
+  std::string text, line;
+  bool replaced = false;
+  while (std::getline(in, line)) {
+    if (!replaced && line.rfind("v ", 0) == 0) {
+      line = "v nan 0 0";
+      replaced = true;
+    }
+    text += line + "\n";
+  }
+  ASSERT_TRUE(replaced);
+  const fs::path non_finite = dir / "frame_nan.obj";
+  std::ofstream(non_finite) << text;
+  EXPECT_NE(error_of(non_finite).find(non_finite.string() + ": vertex "), std::string::npos) << error_of(non_finite);
+  EXPECT_NE(error_of(non_finite).find("has a non-finite coordinate"), std::string::npos) << error_of(non_finite);
+}
+
+TEST(MeshIo, NonFiniteVerticesAreNotWelded) {
+  const fs::path dir = fs::temp_directory_path() / ("drape_mesh_io_" + std::to_string(::getpid()));
+  fs::create_directories(dir);
+  const fs::path path = dir / "nan.obj";
+  std::ofstream(path) << "v 0 0 0\nv 1 0 0\nv nan 0 0\nf 1 2 3\n";
+  const TriangleMesh mesh = load_mesh(path);
+  ASSERT_EQ(mesh.vertices.size(), 3u);
+  EXPECT_FALSE(mesh.vertices[2].allFinite());
+  EXPECT_EQ(mesh_problem(mesh), "vertex 2 has a non-finite coordinate");
+}

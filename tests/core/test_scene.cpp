@@ -103,6 +103,34 @@ TEST(Scene, BadInputNamesTheFileThePathAndWhatWasExpected) {
       {R"({"cloths": [{"mesh": "nowhere.obj"}]})", "/cloths/0/mesh: nowhere.obj: no such mesh file"},
       {R"({"cloths": [{"grid": {}}], "output": {"mesh_format": "xyz"}})", "/output/mesh_format: expected one of"},
       {R"({"cloths": [{"grid": {}}], "frames": 1e999})", "bad.json: invalid JSON: number overflow"},
+      {R"({"cloths": [{"grid": 5}]})", "bad.json: /cloths/0/grid: expected an object, found 5"},
+      {R"({"cloths": {}})", "bad.json: /cloths: expected an array, found {}"},
+      {R"({"cloths": [{"grid": {}}], "friction": -1})", "bad.json: /friction: expected a number >= 0, found -1"},
+      {R"({"cloths": [{"grid": {}}], "collisions": {"self": "yes"}})",
+       "bad.json: /collisions/self: expected true or false, found \"yes\""},
+      {R"({"cloths": [{"grid": {}}], "output": {"folder": 3}})", "bad.json: /output/folder: expected a string, found 3"},
+      {R"({"cloths": [{"grid": {"size": [1]}}]})", "bad.json: /cloths/0/grid/size: expected an array of 2 numbers, found [1]"},
+      {R"({"cloths": [{"grid": {"resolution": [4]}}]})",
+       "bad.json: /cloths/0/grid/resolution: expected [quads along x, quads along y]"},
+      {R"({"cloths": [{"grid": {}, "transform": {"rotate": [90, 0, 0, 0]}}]})",
+       "bad.json: /cloths/0/transform/rotate: the rotation axis must not be zero"},
+      {R"({"cloths": [{"grid": {}, "transform": {"rotate": [90, 1e200, 0, 0]}}]})",
+       "bad.json: /cloths/0/transform/rotate: expected a rotation axis of finite length"},
+      {R"({"cloths": [{"grid": {}}], "handles": [{"nodes": [0], "motion": {"start": 2, "end": 1}}]})",
+       "bad.json: /handles/0/motion: 'end' must be later than 'start'"},
+      {R"({"cloths": [{"grid": {}}], "bounds": {"min": [-1, -1, 1], "max": [1, 1, -1]}})",
+       "bad.json: /bounds: expected min <= max in every coordinate"},
+      {R"({"cloths": [{"grid": {}, "transform": {"translate": [0, 0, 1]}}], "bounds": {"min": [-1, -1, -1], "max": [1, 1, 0.5]}})",
+       "bad.json: /bounds: expected a box holding every cloth's initial position; cloth 0 has a vertex at (-0.5, -0.5, 1)"},
+      {R"({"cloths": [{"grid": {}}], "obstacles": [{"sphere": {"center": [0, 0, 0], "radius": 1}, "plane": {}}]})",
+       "bad.json: /obstacles/0: expected exactly one of 'sphere', 'plane' or 'mesh'"},
+      {R"({"cloths": [{"grid": {}}], "obstacles": [{"plane": {}, "transform": {"scale": 2}}]})",
+       "bad.json: /obstacles/0/transform: only a mesh obstacle takes a transform"},
+      {R"({"cloths": [{"grid": {}}], "obstacles": [{"plane": {"normal": [1e200, 0, 0]}}]})",
+       "bad.json: /obstacles/0/plane/normal: expected a normal of finite length"},
+      {R"({"cloths": [{"grid": {}}], "frame_steps": 10, "timestep": 0.001})",
+       "bad.json: /: give 'frame_steps' or 'timestep', not both"},
+      {R"({"cloths": [{"grid": {}}], "render": 3})", "bad.json: /render: expected an object"},
   };
   for (const Case& c : cases) {
     const std::string message = error_of(c.text);
@@ -129,6 +157,29 @@ TEST(Scene, BadMeshesAreRejectedWithTheirProblem) {
   EXPECT_NE(error_of(scene_with("degenerate.obj")).find("zero area"), std::string::npos) << error_of(scene_with("degenerate.obj"));
   EXPECT_NE(error_of(scene_with("garbage.obj")).find("/cloths/0/mesh:"), std::string::npos) << error_of(scene_with("garbage.obj"));
   EXPECT_EQ(error_of(scene_with("good.obj")), "");
+  // A NaN is never welded into a finite vertex: the mesh check sees it.
+  std::ofstream(dir / "nan.obj") << "v nan 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nf 1 2 3\nf 1 3 4\n";
+  const std::string non_finite = error_of(scene_with("nan.obj"));
+  EXPECT_NE(non_finite.find("/cloths/0/mesh: " + (dir / "nan.obj").string() + ": vertex "), std::string::npos) << non_finite;
+  EXPECT_NE(non_finite.find("non-finite"), std::string::npos) << non_finite;
+  std::ofstream(dir / "repeated.obj") << "v 0 0 0\nv 1 0 0\nv 1 1 0\nf 1 2 3\nf 1 2 1\n";
+  const std::string repeated = error_of(scene_with("repeated.obj"));
+  EXPECT_NE(repeated.find("/cloths/0/mesh: " + (dir / "repeated.obj").string() + ": triangle 1 repeats a vertex"), std::string::npos)
+      << repeated;
+  // Obstacle meshes are checked alike.
+  const std::string obstacle =
+      error_of(R"({"cloths": [{"grid": {}}], "obstacles": [{"mesh": ")" + (dir / "nonmanifold.obj").string() + R"("}]})");
+  EXPECT_NE(obstacle.find("/obstacles/0/mesh: " + (dir / "nonmanifold.obj").string() + ": edge (0, 1)"), std::string::npos)
+      << obstacle;
+  // Scene bounds must hold a mesh cloth's initial vertices too.
+  const std::string outside = error_of(R"({"cloths": [{"mesh": ")" + (dir / "good.obj").string() +
+                                       R"("}], "bounds": {"min": [-1, -1, -1], "max": [0.5, 0.5, 1]}})");
+  EXPECT_NE(outside.find("bad.json: /bounds: expected a box holding every cloth's initial position; cloth 0 has a vertex at (1, 0, 0)"),
+            std::string::npos)
+      << outside;
+  EXPECT_EQ(error_of(R"({"cloths": [{"mesh": ")" + (dir / "good.obj").string() +
+                     R"("}], "bounds": {"min": [-1, -1, -1], "max": [1, 1, 1]}})"),
+            "");
   // Corners need a grid.
   EXPECT_NE(error_of(R"({"cloths": [{"mesh": ")" + (dir / "good.obj").string() + R"("}], "handles": [{"corners": ["top-left"]}]})")
                 .find("/handles/0/corners: corner names need a grid cloth"),

@@ -50,3 +50,21 @@ TEST(StatsCompare, EmptyAgainstAValueAndMissingRowsDiffer) {
   EXPECT_TRUE(compare_stats(a, other_columns).has_value());
   EXPECT_THROW(compare_stats(a, "/nonexistent.csv"), std::runtime_error);
 }
+
+TEST(StatsCompare, ARowWithAnotherCellCountIsAnErrorNamingTheLine) {
+  const auto good = write("i.csv", std::string(HEADER) + "0,0,1,0.5,0.3\n1,0.1,1,0.5,0.3\n");
+  const auto short_row = write("j.csv", std::string(HEADER) + "0,0,1,0.5,0.3\n1,0.1,1\n");
+  const auto long_row = write("k.csv", std::string(HEADER) + "\n0,0,1,0.5,0.3,7\n");
+  for (const auto& [path, expected] : {std::pair{short_row, ": line 3: expected 5 comma-separated cells as in the header, found 3"},
+                                       std::pair{long_row, ": line 3: expected 5 comma-separated cells as in the header, found 6"}}) {
+    for (const bool as_run : {true, false}) {
+      try {
+        if (as_run) compare_stats(path, good);
+        else compare_stats(good, path);
+        ADD_FAILURE() << path << " was accepted";
+      } catch (const std::runtime_error& e) {
+        EXPECT_NE(std::string(e.what()).find(path.string() + expected), std::string::npos) << e.what();
+      }
+    }
+  }
+}

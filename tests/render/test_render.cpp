@@ -89,7 +89,12 @@ TEST(Render, BadRenderInputIsReportedNotCrashed) {
   EXPECT_EQ(zero.status, 2);
   EXPECT_NE(zero.output.find("/render/resolution: expected each side from 16 to 8192"), std::string::npos) << zero.output;
   std::ofstream(dir / "huge.json") << R"({"cloths": [{"grid": {}}], "render": {"resolution": [8192, 8192], "samples": 4}})";
-  EXPECT_EQ(run_drape("validate " + (dir / "huge.json").string()).status, 0);  // validate checks the simulation part
+  // validate reads the render section with the parser drape run uses.
+  const auto huge_validate = run_drape("validate " + (dir / "huge.json").string());
+  EXPECT_EQ(huge_validate.status, 2);
+  EXPECT_NE(huge_validate.output.find((dir / "huge.json").string() + ": /render/resolution: resolution times samples squared exceeds"),
+            std::string::npos)
+      << huge_validate.output;
   EXPECT_EQ(run_drape("run " + (dir / "huge.json").string() + " --frames 1 --quiet --out " + (dir / "huge_out").string()).status, 2);
   EXPECT_EQ(run_drape("render " + (dir / "zero_out").string() + " --resolution 5x5").status, 2);
   // A run folder whose render/ cannot be created: a file stands in its way.
@@ -110,4 +115,55 @@ TEST(Render, WithoutFfmpegItWarnsAndKeepsThePngs) {
   EXPECT_EQ(run.status, 0) << run.output;
   EXPECT_NE(run.output.find("ffmpeg program is not on the PATH"), std::string::npos) << run.output;
   EXPECT_TRUE(fs::exists(out / "render" / "frame_00002.png"));
+}
+
+TEST(Render, BadRenderSectionsNameThePathAndWhatWasExpected) {
+  struct Case {
+    const char* render;
+    const char* expected;
+  };
+  const Case cases[] = {
+      {R"({"colour": "red"})", "bad.json: /render/colour: unknown key (expected one of: camera, resolution, fps, samples, enabled)"},
+      {R"({"samples": 0})", "bad.json: /render/samples: expected an integer from 1 to 4 (supersampling per axis), found 0"},
+      {R"({"samples": 5})", "bad.json: /render/samples: expected an integer from 1 to 4"},
+      {R"({"samples": 2.5})", "bad.json: /render/samples: expected an integer from 1 to 4"},
+      // 2^32 + 2 and 2^64 - 1 would wrap into 2 and -1 as an int.
+      {R"({"samples": 4294967298})", "bad.json: /render/samples: expected an integer from 1 to 4 (supersampling per axis), found 4294967298"},
+      {R"({"samples": 18446744073709551615})", "bad.json: /render/samples: expected an integer from 1 to 4"},
+      {R"({"enabled": "yes"})", "bad.json: /render/enabled: expected true or false"},
+      {R"({"enabled": 1})", "bad.json: /render/enabled: expected true or false"},
+      {R"({"camera": {"position": [1, 2, 3], "target": [1, 2, 3]}})", "bad.json: /render/camera: position and target must differ"},
+      {R"({"camera": {"fov": 0.5}})", "bad.json: /render/camera/fov: expected degrees from 1 to 170"},
+      {R"({"camera": {"fov": 180}})", "bad.json: /render/camera/fov: expected degrees from 1 to 170"},
+      {R"({"camera": {"position": [0, 0, 1], "target": [0, 0, 0]}})", "bad.json: /render/camera/up: must not be along the view direction"},
+      {R"({"camera": {"lens": 50}})", "bad.json: /render/camera/lens: unknown key"},
+      {R"({"camera": {"position": [0, 0]}})", "bad.json: /render/camera/position: expected an array of 3 numbers"},
+      {R"({"camera": 3})", "bad.json: /render/camera: expected an object"},
+      {R"({"resolution": [4]})", "bad.json: /render/resolution: expected [width, height] in pixels, found [4]"},
+      {R"({"resolution": "1280x720"})", "bad.json: /render/resolution: expected [width, height] in pixels"},
+      {R"({"resolution": [640.5, 480]})", "bad.json: /render/resolution: expected [width, height] in pixels"},
+      {R"({"resolution": [8, 720]})", "bad.json: /render/resolution: expected each side from 16 to 8192 pixels, found [8,720]"},
+      // 2^32 + 16 would wrap into 16 as an int.
+      {R"({"resolution": [4294967312, 720]})",
+       "bad.json: /render/resolution: expected each side from 16 to 8192 pixels, found [4294967312,720]"},
+      {R"({"resolution": [640, -4294966816]})", "bad.json: /render/resolution: expected each side from 16 to 8192 pixels"},
+      {R"({"resolution": [8192, 8192], "samples": 4})", "bad.json: /render/resolution: resolution times samples squared exceeds"},
+      {R"({"fps": 0})", "bad.json: /render/fps: expected a frame rate from 0 to 240"},
+  };
+  for (const Case& c : cases) {
+    const Scene scene = parse_scene(std::string(R"({"cloths": [{"grid": {}}], "render": )") + c.render + "}", "bad.json");
+    std::string message;
+    try {
+      render::parse_render_settings(scene);
+    } catch (const render::RenderError& e) {
+      message = e.what();
+    }
+    EXPECT_NE(message.find(c.expected), std::string::npos) << "render: " << c.render << "\nmessage: " << message;
+  }
+  // The limits themselves are accepted.
+  const Scene edge = parse_scene(R"({"cloths": [{"grid": {}}], "render": {"resolution": [16, 8192], "samples": 4}})", "edge.json");
+  const render::RenderSettings settings = render::parse_render_settings(edge);
+  EXPECT_EQ(settings.width, 16);
+  EXPECT_EQ(settings.height, 8192);
+  EXPECT_EQ(settings.samples, 4);
 }

@@ -18,13 +18,16 @@ class MeshFileError : public std::runtime_error {
 };
 
 /// Reads every triangle of the file into one mesh, welding vertices at identical positions
-/// (formats like OBJ repeat a position for each normal or texture coordinate).
+/// (formats like OBJ repeat a position for each normal or texture coordinate); a vertex with a
+/// non-finite coordinate is never welded, so that mesh_problem reports it.
 /// Throws MeshFileError; does not validate the mesh (see mesh_problem).
 TriangleMesh load_mesh(const std::filesystem::path& path);
 
 /// The positions of a saved frame of a known mesh: the file's triangles, in order, are the
 /// mesh's triangles, so each corner gives its vertex's position (no welding, so vertices that
-/// happen to coincide stay apart). Throws MeshFileError when the triangle count differs.
+/// happen to coincide stay apart). Throws MeshFileError when the file's triangle count differs
+/// from the mesh's ("<file>: expected N triangles, found M") or a coordinate is not finite
+/// ("<file>: vertex N has a non-finite coordinate").
 std::vector<Vec3> load_frame_positions(const std::filesystem::path& path, const TriangleMesh& topology);
 
 /// Writes the mesh atomically (a temporary file renamed into place), so a reader never sees a

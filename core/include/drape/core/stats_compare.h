@@ -29,7 +29,8 @@ struct StatsDifference {
 };
 
 /// The first difference beyond tolerance, or nullopt when the files agree. Throws
-/// std::runtime_error when a file cannot be read.
+/// std::runtime_error naming the file (and line) when a file cannot be read, is empty, or has a
+/// row whose cell count differs from its header.
 std::optional<StatsDifference> compare_stats(const std::filesystem::path& run, const std::filesystem::path& golden);
 
 }  // namespace drape
