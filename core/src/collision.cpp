@@ -229,6 +229,24 @@ struct CollisionPipeline::Impl {
     return hits;
   }
 
+  // The self-collision response must not push cloth into a sphere or plane (the integrator
+  // answered those before): a free vertex whose end position lies within half the thickness of
+  // one is moved back out to that depth. Runs before every re-detection, so what the final
+  // detection sees is both above the shapes and, when it finds nothing, intersection-free.
+  void keep_out_of_analytic_obstacles(Scalar t_next, Scalar h, std::vector<Vec3>& motion) const {
+    if (!model.scene.collisions.obstacles) return;
+    const Scalar floor = 0.5 * model.scene.collisions.thickness;
+    for (const Obstacle& obstacle : model.obstacles) {
+      if (obstacle.spec.kind == ObstacleSpec::Kind::Mesh) continue;
+      for (int v = 0; v < cloth_vertices; ++v) {
+        if (!(inverse_mass[v] > 0)) continue;
+        const Vec3 predicted = start[v] + h * motion[v];
+        const SurfaceContact c = analytic_contact(obstacle, t_next, predicted);
+        if (c.signed_distance < floor) motion[v] = (predicted + (floor - c.signed_distance) * c.normal - start[v]) / h;
+      }
+    }
+  }
+
   // Proximity repulsion: features closer than the thickness at the start move apart.
   void repel(const ccd::Candidates& c, Scalar h, std::vector<Vec3>& motion, CollisionCounters& counters) {
     const Scalar thickness = model.scene.collisions.thickness;
@@ -322,10 +340,12 @@ CollisionCounters CollisionPipeline::resolve(const std::vector<Vec3>& start, Sca
   ccd::Candidates first;
   auto hits = m.detect(h, motion, counters, &first);
   m.repel(first, h, motion, counters);
+  m.keep_out_of_analytic_obstacles(t + h, h, motion);
   hits = m.detect(h, motion, counters);
   for (int round = 0; !hits.empty() && round < m.settings.max_impulse_iterations; ++round) {
     ++counters.impulse_iterations;
     for (const auto& [contact, toc] : hits) m.impulse(contact, separation, h, motion);
+    m.keep_out_of_analytic_obstacles(t + h, h, motion);
     hits = m.detect(h, motion, counters);
   }
   // Impact zones, growing until no collision is left.
@@ -334,6 +354,7 @@ CollisionCounters CollisionPipeline::resolve(const std::vector<Vec3>& start, Sca
     for (const auto& [contact, toc] : hits)
       for (int k = 1; k < 4; ++k) zones.join(contact.vertex[0], contact.vertex[k]);
     m.apply_zones(zones, h, motion, counters);
+    m.keep_out_of_analytic_obstacles(t + h, h, motion);
     hits = m.detect(h, motion, counters);
   }
   // The fail-safe: colliding cloth vertices keep their start positions; then all of them.
