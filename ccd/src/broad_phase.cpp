@@ -3,6 +3,7 @@
 #include <BulletCollision/BroadphaseCollision/btDbvt.h>
 
 #include <algorithm>
+#include <cmath>
 
 namespace drape::ccd {
 
@@ -18,13 +19,23 @@ Aabb swept_box(const std::array<std::int32_t, 3>& triangle, std::span<const Vec3
   return box;
 }
 
-std::vector<Aabb> vertex_boxes(std::span<const Vec3> start, std::span<const Vec3> end, Scalar margin) {
-  std::vector<Aabb> boxes(start.size());
+std::vector<FeatureVolume> vertex_volumes(std::span<const Vec3> start, std::span<const Vec3> end, Scalar margin) {
+  const Scalar diagonal_margin = margin * std::sqrt(Scalar(2));
+  std::vector<FeatureVolume> volumes(start.size());
   for (std::size_t v = 0; v < start.size(); ++v) {
-    boxes[v].min = start[v].cwiseMin(end[v]).array() - margin;
-    boxes[v].max = start[v].cwiseMax(end[v]).array() + margin;
+    const auto project = [](const Vec3& p) {
+      return std::array<Scalar, FeatureVolume::AXES>{p.x(),         p.y(),         p.z(),
+                                                     p.x() + p.y(), p.x() - p.y(), p.x() + p.z(),
+                                                     p.x() - p.z(), p.y() + p.z(), p.y() - p.z()};
+    };
+    const auto a = project(start[v]), b = project(end[v]);
+    for (int k = 0; k < FeatureVolume::AXES; ++k) {
+      const Scalar grow = k < 3 ? margin : diagonal_margin;
+      volumes[v].min[k] = std::min(a[k], b[k]) - grow;
+      volumes[v].max[k] = std::max(a[k], b[k]) + grow;
+    }
   }
-  return boxes;
+  return volumes;
 }
 
 namespace {
@@ -96,32 +107,29 @@ std::vector<std::pair<std::int32_t, std::int32_t>> BoxTree::pairs_with(const Box
 
 Candidates feature_pairs(std::span<const TriangleIndices> triangles_a, std::span<const TriangleIndices> triangles_b,
                          std::span<const std::pair<std::int32_t, std::int32_t>> pairs,
-                         std::span<const Aabb> vertex_boxes) {
+                         std::span<const FeatureVolume> vertex_volumes) {
   Candidates out;
-  const bool cull = !vertex_boxes.empty();
+  const bool cull = !vertex_volumes.empty();
   const auto union_of = [&](std::span<const std::int32_t> vertices) {
-    Aabb box = vertex_boxes[vertices[0]];
-    for (std::size_t k = 1; k < vertices.size(); ++k) {
-      box.min = box.min.cwiseMin(vertex_boxes[vertices[k]].min);
-      box.max = box.max.cwiseMax(vertex_boxes[vertices[k]].max);
-    }
-    return box;
+    FeatureVolume volume = vertex_volumes[vertices[0]];
+    for (std::size_t k = 1; k < vertices.size(); ++k) volume.merge(vertex_volumes[vertices[k]]);
+    return volume;
   };
   std::vector<std::array<std::int32_t, 4>> vf, ee;  // (vertex, face corners) and (edge, edge), canonical
   vf.reserve(pairs.size() * 6);
   ee.reserve(pairs.size() * 9);
   const auto shares = [](std::int32_t v, const TriangleIndices& t) { return v == t[0] || v == t[1] || v == t[2]; };
   const auto add_vertex_face = [&](const TriangleIndices& from, const TriangleIndices& face) {
-    const Aabb face_box = cull ? union_of(face) : Aabb{};
+    const FeatureVolume face_volume = cull ? union_of(face) : FeatureVolume{};
     for (std::int32_t v : from)
-      if (!shares(v, face) && (!cull || overlap(vertex_boxes[v], face_box))) vf.push_back({v, face[0], face[1], face[2]});
+      if (!shares(v, face) && (!cull || overlap(vertex_volumes[v], face_volume))) vf.push_back({v, face[0], face[1], face[2]});
   };
   for (const auto& [ia, ib] : pairs) {
     const TriangleIndices& a = triangles_a[ia];
     const TriangleIndices& b = triangles_b[ib];
     add_vertex_face(a, b);
     add_vertex_face(b, a);
-    std::array<Aabb, 3> edge_box_a, edge_box_b;
+    std::array<FeatureVolume, 3> edge_box_a, edge_box_b;
     if (cull)
       for (int i = 0; i < 3; ++i) {
         edge_box_a[i] = union_of(std::array<std::int32_t, 2>{a[i], a[(i + 1) % 3]});

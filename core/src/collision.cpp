@@ -72,7 +72,7 @@ struct CollisionPipeline::Impl {
   std::vector<Scalar> inverse_mass;  // combined array; 0 for kinematic vertices
   std::vector<Vec3> start, end;      // combined positions at t and t + h
   std::vector<ccd::Aabb> boxes;
-  std::vector<ccd::Aabb> features;  // per-vertex swept boxes for feature_pairs (empty: no feature culling)
+  std::vector<ccd::FeatureVolume> features;  // per-vertex swept volumes for feature_pairs (empty: no feature culling)
   ccd::Options options;
   CollisionPipeline::Observer observer;
 
@@ -104,7 +104,7 @@ struct CollisionPipeline::Impl {
     boxes.resize(cloth_triangles.size());
     for (std::size_t i = 0; i < cloth_triangles.size(); ++i) boxes[i] = ccd::swept_box(cloth_triangles[i], start, end, margin);
     cloth_tree.update(boxes);
-    if (model.scene.collisions.feature_boxes) features = ccd::vertex_boxes(start, end, margin);
+    if (model.scene.collisions.feature_boxes) features = ccd::vertex_volumes(start, end, margin);
     else features.clear();
     const auto append = [&](ccd::Candidates&& c) {
       all.vertex_face.insert(all.vertex_face.end(), c.vertex_face.begin(), c.vertex_face.end());

@@ -82,9 +82,9 @@ TEST(FeaturePairs, FeaturesSharingAVertexAreSkippedAndSharedEdgesTestedOnce) {
   EXPECT_EQ(unique.size(), fan.edge_edge.size());
 }
 
-// Feature boxes drop exactly the pairs whose features' boxes are apart, and nothing the
+// Feature volumes drop exactly the pairs whose features' volumes are apart, and nothing the
 // conservative test would find within twice the margin.
-TEST(FeaturePairs, FeatureBoxesDropOnlyPairsThatStayApart) {
+TEST(FeaturePairs, FeatureVolumesDropOnlyPairsThatStayApart) {
   std::mt19937 rng(7);
   std::uniform_real_distribution<Scalar> coordinate(0, 1), step(-0.05, 0.05);
   constexpr int TRIANGLES = 60;
@@ -102,12 +102,12 @@ TEST(FeaturePairs, FeatureBoxesDropOnlyPairsThatStayApart) {
   std::vector<std::pair<std::int32_t, std::int32_t>> pairs;
   for (int i = 0; i < TRIANGLES; ++i)
     for (int j = i + 1; j < TRIANGLES; ++j) pairs.emplace_back(i, j);
-  const auto boxes = vertex_boxes(start, end, MARGIN);
+  const auto volumes = vertex_volumes(start, end, MARGIN);
   const Candidates all = feature_pairs(tris, tris, pairs);
-  const Candidates kept = feature_pairs(tris, tris, pairs, boxes);
+  const Candidates kept = feature_pairs(tris, tris, pairs, volumes);
   const auto box_of = [&](std::initializer_list<std::int32_t> vertices) {
-    Aabb b = boxes[*vertices.begin()];
-    for (auto v : vertices) b.min = b.min.cwiseMin(boxes[v].min), b.max = b.max.cwiseMax(boxes[v].max);
+    FeatureVolume b = volumes[*vertices.begin()];
+    for (auto v : vertices) b.merge(volumes[v]);
     return b;
   };
   Options near;
@@ -116,7 +116,7 @@ TEST(FeaturePairs, FeatureBoxesDropOnlyPairsThatStayApart) {
   const BatchInput input{start, end, {}, {}};
   std::size_t vf_kept = 0, ee_kept = 0;
   for (const auto& p : all.vertex_face) {
-    const bool apart = !overlap(boxes[p.vertex], box_of({p.face[0], p.face[1], p.face[2]}));
+    const bool apart = !overlap(volumes[p.vertex], box_of({p.face[0], p.face[1], p.face[2]}));
     vf_kept += !apart;
     if (apart) {
       EXPECT_FALSE(vertex_face_ccd(gather(input, p), near).hit);
@@ -134,4 +134,19 @@ TEST(FeaturePairs, FeatureBoxesDropOnlyPairsThatStayApart) {
   EXPECT_GT(vf_kept, 0u);
   EXPECT_LT(vf_kept, all.vertex_face.size());  // the random set has both kinds
   EXPECT_LT(ee_kept, all.edge_edge.size());
+}
+
+// On a flat grid at rest the box of a right triangle holds the far corner of its quad; the
+// diagonal axes of the volume separate them, so the pair is not tested.
+TEST(FeaturePairs, FeatureVolumesSeparateTheFarCornerOfAQuad) {
+  const std::vector<Vec3> corners{Vec3(0, 0, 0), Vec3(0.02, 0, 0), Vec3(0, 0.02, 0), Vec3(0.02, 0.02, 0)};
+  const std::vector<TriangleIndices> tris{{0, 1, 2}, {1, 3, 2}};
+  const std::vector<std::pair<std::int32_t, std::int32_t>> pairs{{0, 1}};
+  const Candidates all = feature_pairs(tris, tris, pairs);
+  ASSERT_EQ(all.vertex_face.size(), 2u);  // 3 against (0,1,2) and 0 against (1,3,2)
+  const auto volumes = vertex_volumes(corners, corners, 0.004);
+  EXPECT_TRUE(feature_pairs(tris, tris, pairs, volumes).vertex_face.empty());
+  // A box would keep them: vertex 3 lies on the corner of triangle 0's box.
+  const Aabb box = swept_box(tris[0], corners, corners, 0.004);
+  EXPECT_TRUE((corners[3].array() >= box.min.array()).all() && (corners[3].array() <= box.max.array()).all());
 }

@@ -4,6 +4,7 @@
 /// btDbvt, double precision), updated in place from step to step, and the candidate
 /// elementary tests generated from overlapping triangle pairs.
 
+#include <algorithm>
 #include <array>
 #include <cstdint>
 #include <memory>
@@ -24,13 +25,31 @@ struct Aabb {
 Aabb swept_box(const std::array<std::int32_t, 3>& triangle, std::span<const Vec3> start, std::span<const Vec3> end,
                Scalar margin);
 
-/// The boxes of single vertices moving from start to end, grown by margin: feature_pairs
-/// culls a feature pair whose features' boxes (unions of their vertices' boxes) are apart.
-std::vector<Aabb> vertex_boxes(std::span<const Vec3> start, std::span<const Vec3> end, Scalar margin);
-
 inline bool overlap(const Aabb& a, const Aabb& b) {
   return (a.min.array() <= b.max.array()).all() && (b.min.array() <= a.max.array()).all();
 }
+
+/// The swept volume of a vertex or a feature for feature_pairs' culling: the intervals its
+/// positions at the start and the end of the step cover along 9 axes, x, y, z and the six face
+/// diagonals x+y, x-y, x+z, x-z, y+z, y-z (an 18-DOP, tighter than a box around slanted
+/// features), each grown by the margin times the axis' length. Two volumes apart along an axis
+/// mean their points stay more than twice the margin apart during the whole step.
+struct FeatureVolume {
+  static constexpr int AXES = 9;
+  std::array<Scalar, AXES> min, max;
+  void merge(const FeatureVolume& other) {
+    for (int k = 0; k < AXES; ++k) min[k] = std::min(min[k], other.min[k]), max[k] = std::max(max[k], other.max[k]);
+  }
+};
+
+inline bool overlap(const FeatureVolume& a, const FeatureVolume& b) {
+  bool apart = false;
+  for (int k = 0; k < FeatureVolume::AXES; ++k) apart |= (a.min[k] > b.max[k]) | (b.min[k] > a.max[k]);
+  return !apart;
+}
+
+/// The volumes of single vertices moving from start to end, grown by margin.
+std::vector<FeatureVolume> vertex_volumes(std::span<const Vec3> start, std::span<const Vec3> end, Scalar margin);
 
 /// A btDbvt over boxes, one leaf per box, kept behind this type.
 class BoxTree {
@@ -60,11 +79,12 @@ class BoxTree {
 /// vertex array (offset the second mesh's indices when the two meshes differ). Sorted, so the
 /// order does not depend on how the pairs were found.
 ///
-/// With vertex boxes (vertex_boxes(), indexed like the triangles), a pair is also dropped when
-/// the boxes of its two features do not overlap: with boxes grown by the same margin as the
-/// triangles', such features stay more than twice the margin apart along some axis during the
-/// whole step, so no elementary test could report them. Most pairs of neighbouring triangles
-/// of one sheet go this way; they are nearly coplanar, which no coplanarity filter can cull.
+/// With vertex volumes (vertex_volumes(), indexed like the triangles), a pair is also dropped
+/// when the volumes of its two features (the merged volumes of their vertices) do not overlap:
+/// grown by the same margin as the triangles' boxes, such features stay more than twice the
+/// margin apart during the whole step, so no elementary test could report them. Most pairs of
+/// neighbouring triangles of one sheet go this way; they are nearly coplanar, which no
+/// coplanarity filter can cull.
 struct Candidates {
   std::vector<VertexFacePair> vertex_face;
   std::vector<EdgeEdgePair> edge_edge;
@@ -76,6 +96,6 @@ using TriangleIndices = std::array<std::int32_t, 3>;
 /// span twice.
 Candidates feature_pairs(std::span<const TriangleIndices> triangles_a, std::span<const TriangleIndices> triangles_b,
                          std::span<const std::pair<std::int32_t, std::int32_t>> pairs,
-                         std::span<const Aabb> vertex_boxes = {});
+                         std::span<const FeatureVolume> vertex_volumes = {});
 
 }  // namespace drape::ccd
