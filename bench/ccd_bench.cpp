@@ -13,6 +13,7 @@
 #include <functional>
 
 #include "ccd_peers.h"
+#include "drape/ccd/batch.h"
 #include "drape/ccd/evaluation.h"
 #include "drape/ccd/query_file.h"
 #include "drape/ccd/query_generator.h"
@@ -185,6 +186,34 @@ int main(int argc, char** argv) {
             " jittered grid and a folded sheet (" + std::to_string(cloth.start.size()) + " vertices)",
         cloth_rows);
 
+  // (c) The cloth-like set through the batch entry point, the form the cloth pipeline calls:
+  // pairs of indices into the vertex arrays, the cubics of a chunk computed together.
+  std::vector<VertexFacePair> vf_pairs;
+  std::vector<EdgeEdgePair> ee_pairs;
+  for (const auto& p : cloth.vertex_face) vf_pairs.push_back({p[0], {p[1], p[2], p[3]}});
+  for (const auto& p : cloth.edge_edge) ee_pairs.push_back({{p[0], p[1]}, {p[2], p[3]}});
+  const BatchInput batch{cloth.start, cloth.end, vf_pairs, ee_pairs};
+  const double batch_tests = double(vf_pairs.size() + ee_pairs.size());
+  std::printf("\n(c) the same cloth-like set through the batch entry point (run_batch, one thread)\n");
+  std::printf("%-17s %10s %10s %12s\n", "method", "tests", "ns/test", "vincent is");
+  double batch_ns[4] = {0, 0, 0, 0};
+  for (int m = 0; m < 4; ++m) {
+    Options options;
+    options.method = ALL_METHODS[m];
+    std::vector<double> seconds;
+    for (int p = 0; p < passes; ++p) {
+      const auto begin = std::chrono::steady_clock::now();
+      const BatchOutput out = run_batch(batch, options, 1);
+      seconds.push_back(std::chrono::duration<double>(std::chrono::steady_clock::now() - begin).count());
+      if (out.counters.tests == 0) std::puts("");
+    }
+    batch_ns[m] = 1e9 * median(seconds) / batch_tests;
+  }
+  const int vincent_index = int(std::find(ALL_METHODS.begin(), ALL_METHODS.end(), Method::Vincent) - ALL_METHODS.begin());
+  for (int m = 0; m < 4; ++m)
+    std::printf("%-17s %10.0f %10.1f %11.2fx\n", std::string(method_name(ALL_METHODS[m])).c_str(), batch_tests, batch_ns[m],
+                batch_ns[m] / batch_ns[vincent_index]);
+
   std::printf("\nTargets\n");
   const auto ns = [](const std::vector<Row>& rows, const std::string& name) {
     const Row* r = find(rows, name, "all");
@@ -199,6 +228,19 @@ int main(int argc, char** argv) {
   if (find(cloth_rows, "fcl-filtered", "all"))
     target(ns(cloth_rows, "fcl-filtered") > vincent, "cloth-like: vincent faster than FCL's filtered functions");
   target(ns(cloth_rows, "conservative") <= 2 * vincent, "cloth-like: conservative at most 2x vincent");
+  const auto batch_of = [&](Method m) {
+    return batch_ns[std::find(ALL_METHODS.begin(), ALL_METHODS.end(), m) - ALL_METHODS.begin()];
+  };
+  const double vincent_batch = batch_of(Method::Vincent);
+  std::printf("  cloth-like, batch: cubic/vincent = %.2fx, dnf/vincent = %.2fx, conservative/vincent = %.2fx\n",
+              batch_of(Method::Cubic) / vincent_batch, batch_of(Method::Dnf) / vincent_batch,
+              batch_of(Method::Conservative) / vincent_batch);
+  target(batch_of(Method::Cubic) >= 5 * vincent_batch, "cloth-like, batch: vincent at least 5x faster than cubic");
+  target(batch_of(Method::Dnf) > vincent_batch, "cloth-like, batch: vincent faster than dnf");
+  if (find(cloth_rows, "fcl-filtered", "all"))
+    target(ns(cloth_rows, "fcl-filtered") > vincent_batch,
+           "cloth-like: vincent through the batch faster than FCL's filtered functions");
+  target(batch_of(Method::Conservative) <= 2 * vincent_batch, "cloth-like, batch: conservative at most 2x vincent");
   const Row* conservative = find(shared_rows, "conservative", "all");
   target(conservative->false_negatives == 0, "shared files: conservative misses no contact (" +
                                                  std::to_string(conservative->false_negatives) + " missed)");

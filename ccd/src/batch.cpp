@@ -4,7 +4,12 @@
 #include <tbb/parallel_for.h>
 #include <tbb/task_arena.h>
 
+#include <algorithm>
 #include <cassert>
+#include <cmath>
+#include <limits>
+
+#include "drape/ccd/coplanarity.h"
 
 namespace drape::ccd {
 
@@ -50,23 +55,114 @@ EdgeEdgeQuery gather(const BatchInput& input, const EdgeEdgePair& pair) {
   return q;
 }
 
+namespace {
+
+// Tests whose cubics are computed together: the coordinates of a chunk are gathered into one
+// array per coordinate so that the arithmetic runs on several tests at once (SIMD).
+constexpr std::size_t CHUNK = 64;
+
+struct ChunkCubics {
+  // The differences x2 - x1, x3 - x1, x4 - x1 (A, B, C) at t = 0 and t = 1, per coordinate.
+  alignas(64) Scalar a0[3][CHUNK], a1[3][CHUNK], b0[3][CHUNK], b1[3][CHUNK], c0[3][CHUNK], c1[3][CHUNK];
+  alignas(64) Scalar coefficient[4][CHUNK], error[CHUNK], extent[CHUNK];
+};
+
+std::array<std::int32_t, 4> points(const VertexFacePair& p) { return {p.vertex, p.face[0], p.face[1], p.face[2]}; }
+std::array<std::int32_t, 4> points(const EdgeEdgePair& p) { return {p.edge_a[0], p.edge_a[1], p.edge_b[0], p.edge_b[1]}; }
+
+// coplanarity_cubic_in<Scalar> for n tests at once, operation for operation (the results are the
+// same bits; the batch test compares them with the one-query entry points).
+__attribute__((target_clones("avx2", "default"))) void compute_cubics(ChunkCubics& c, std::size_t n) {
+  constexpr Scalar unit_roundoff = std::numeric_limits<Scalar>::epsilon() / 2;
+  for (std::size_t i = 0; i < n; ++i) {
+    const auto cross = [&](const Scalar (*u)[CHUNK], const Scalar (*v)[CHUNK], Scalar out[3]) {
+      out[0] = u[1][i] * v[2][i] - u[2][i] * v[1][i];
+      out[1] = u[2][i] * v[0][i] - u[0][i] * v[2][i];
+      out[2] = u[0][i] * v[1][i] - u[1][i] * v[0][i];
+    };
+    const auto dot = [&](const Scalar (*u)[CHUNK], const Scalar w[3]) { return u[0][i] * w[0] + u[1][i] * w[1] + u[2][i] * w[2]; };
+    Scalar b0c0[3], b1c0[3], b0c1[3], b1c1[3];
+    cross(c.b0, c.c0, b0c0);
+    cross(c.b1, c.c0, b1c0);
+    cross(c.b0, c.c1, b0c1);
+    cross(c.b1, c.c1, b1c1);
+    c.coefficient[0][i] = dot(c.a0, b0c0);
+    c.coefficient[1][i] = (dot(c.a1, b0c0) + dot(c.a0, b1c0) + dot(c.a0, b0c1)) / Scalar(3);
+    c.coefficient[2][i] = (dot(c.a1, b1c0) + dot(c.a1, b0c1) + dot(c.a0, b1c1)) / Scalar(3);
+    c.coefficient[3][i] = dot(c.a1, b1c1);
+    const auto l1 = [&](const Scalar (*s)[CHUNK], const Scalar (*e)[CHUNK]) {
+      return std::max(std::abs(s[0][i]) + std::abs(s[1][i]) + std::abs(s[2][i]),
+                      std::abs(e[0][i]) + std::abs(e[1][i]) + std::abs(e[2][i]));
+    };
+    const Scalar a = l1(c.a0, c.a1), b = l1(c.b0, c.b1), cc = l1(c.c0, c.c1);
+    c.error[i] = Scalar(COPLANARITY_ERROR_FACTOR) * unit_roundoff * a * b * cc;
+    c.extent[i] = std::max(std::max(a, b), cc);
+  }
+}
+
+// The tests [begin, end) of one kind: cubics a chunk at a time; dnf and vincent decide the
+// culled ones from the cubic alone, everything else runs the full method on the gathered query.
+template <class Pair>
+void run_range(const BatchInput& input, std::span<const Pair> pairs, QueryKind kind, const Options& options,
+               std::size_t begin, std::size_t end, Result* out) {
+  const auto order = coplanarity_order(kind);
+  const bool filter = options.method == Method::Dnf || options.method == Method::Vincent;
+  ChunkCubics c;
+  for (std::size_t first = begin; first < end; first += CHUNK) {
+    const std::size_t n = std::min(CHUNK, end - first);
+    for (std::size_t i = 0; i < n; ++i) {
+      const auto index = points(pairs[first + i]);
+      const Vec3 &s1 = input.start[index[order[0]]], &e1 = input.end[index[order[0]]];
+      const Vec3 &s2 = input.start[index[order[1]]], &e2 = input.end[index[order[1]]];
+      const Vec3 &s3 = input.start[index[order[2]]], &e3 = input.end[index[order[2]]];
+      const Vec3 &s4 = input.start[index[order[3]]], &e4 = input.end[index[order[3]]];
+      for (int k = 0; k < 3; ++k) {
+        c.a0[k][i] = s2[k] - s1[k];
+        c.a1[k][i] = e2[k] - e1[k];
+        c.b0[k][i] = s3[k] - s1[k];
+        c.b1[k][i] = e3[k] - e1[k];
+        c.c0[k][i] = s4[k] - s1[k];
+        c.c1[k][i] = e4[k] - e1[k];
+      }
+    }
+    compute_cubics(c, n);
+    for (std::size_t i = 0; i < n; ++i) {
+      CoplanarityCubic cubic;
+      for (int k = 0; k < 4; ++k) cubic.b[k] = c.coefficient[k][i];
+      cubic.error = c.error[i];
+      cubic.extent = c.extent[i];
+      if (filter && filter_culls(cubic)) {
+        out[first + i] = Result{};
+        continue;
+      }
+      out[first + i] = elementary_ccd(kind, gather(input, pairs[first + i]), options, cubic);
+    }
+  }
+}
+
+}  // namespace
+
 BatchOutput run_batch(const BatchInput& input, const Options& options, int threads) {
   assert(input.start.size() == input.end.size());
   BatchOutput out;
   out.vertex_face.resize(input.vertex_face.size());
   out.edge_edge.resize(input.edge_edge.size());
-  const auto vertex_face = [&](std::size_t i) { out.vertex_face[i] = vertex_face_ccd(gather(input, input.vertex_face[i]), options); };
-  const auto edge_edge = [&](std::size_t i) { out.edge_edge[i] = edge_edge_ccd(gather(input, input.edge_edge[i]), options); };
+  const auto vertex_face = [&](std::size_t begin, std::size_t end) {
+    run_range(input, input.vertex_face, QueryKind::VertexFace, options, begin, end, out.vertex_face.data());
+  };
+  const auto edge_edge = [&](std::size_t begin, std::size_t end) {
+    run_range(input, input.edge_edge, QueryKind::EdgeEdge, options, begin, end, out.edge_edge.data());
+  };
   if (threads <= 1) {
-    for (std::size_t i = 0; i < out.vertex_face.size(); ++i) vertex_face(i);
-    for (std::size_t i = 0; i < out.edge_edge.size(); ++i) edge_edge(i);
+    vertex_face(0, out.vertex_face.size());
+    edge_edge(0, out.edge_edge.size());
   } else {
     tbb::task_arena arena(threads);
     arena.execute([&] {
       tbb::parallel_for(tbb::blocked_range<std::size_t>(0, out.vertex_face.size(), GRAIN),
-                        [&](const auto& r) { for (std::size_t i = r.begin(); i < r.end(); ++i) vertex_face(i); });
+                        [&](const auto& r) { vertex_face(r.begin(), r.end()); });
       tbb::parallel_for(tbb::blocked_range<std::size_t>(0, out.edge_edge.size(), GRAIN),
-                        [&](const auto& r) { for (std::size_t i = r.begin(); i < r.end(); ++i) edge_edge(i); });
+                        [&](const auto& r) { edge_edge(r.begin(), r.end()); });
     });
   }
   for (const Result& r : out.vertex_face) out.counters.add(r);

@@ -69,15 +69,8 @@ Result degenerate_path(const Problem& p) {
 bool root_possible_at_start(const Problem& p) { return std::abs(p.cubic.b[0]) <= p.cubic.error; }
 bool root_possible_at_end(const Problem& p) { return std::abs(p.cubic.b[3]) <= p.cubic.error; }
 
-// The filter's cull: one strict sign and both ends clear of their rounding error (a vanishing
-// cubic has |b0| within its error, so it is never culled).
-bool culled_by_sign(const Problem& p) {
-  const Bernstein3& b = p.cubic.b;
-  return same_strict_sign(b) & (std::min(std::abs(b[0]), std::abs(b[3])) > p.cubic.error);
-}
-
 Result cubic_method(const Problem& p) {
-  if (detail::cubic_poorly_resolved(p.cubic)) return degenerate_path(p);
+  if (cubic_poorly_resolved(p.cubic)) return degenerate_path(p);
   Result result;
   result.path = Path::Solved;
   result.root_solves = 1;
@@ -94,8 +87,8 @@ Result cubic_method(const Problem& p) {
 
 Result dnf_method(const Problem& p) {
   // Unreliable roots first, as cubic does: the filter must not cull what cubic would find.
-  if (detail::cubic_poorly_resolved(p.cubic)) return degenerate_path(p);
-  if (culled_by_sign(p)) return Result{};
+  if (cubic_poorly_resolved(p.cubic)) return degenerate_path(p);
+  if (filter_culls(p.cubic)) return Result{};
   return cubic_method(p);
 }
 
@@ -107,8 +100,8 @@ Result dnf_method(const Problem& p) {
 Result vincent_method(const Problem& p) {
   const Bernstein3& b = p.cubic.b;
   // Unreliable roots first, as cubic does: the filter must not cull what cubic would find.
-  if (detail::cubic_poorly_resolved(p.cubic)) return degenerate_path(p);
-  if (culled_by_sign(p)) return Result{};
+  if (cubic_poorly_resolved(p.cubic)) return degenerate_path(p);
+  if (filter_culls(p.cubic)) return Result{};
   Result result;
   if (root_possible_at_start(p)) {  // the features may start coplanar
     result.path = Path::Solved;
@@ -167,8 +160,8 @@ Result vincent_method(const Problem& p) {
   return result;
 }
 
-Result run(QueryKind kind, const Query& query, const Options& options) {
-  const Problem p{kind, query, options, coplanarity_cubic(kind, query)};
+Result run(QueryKind kind, const Query& query, const Options& options, const CoplanarityCubic& cubic) {
+  const Problem p{kind, query, options, cubic};
   switch (options.method) {
     case Method::Cubic: return cubic_method(p);
     case Method::Dnf: return dnf_method(p);
@@ -181,15 +174,19 @@ Result run(QueryKind kind, const Query& query, const Options& options) {
 }  // namespace
 
 Result vertex_face_ccd(const VertexFaceQuery& query, const Options& options) {
-  return run(QueryKind::VertexFace, query, options);
+  return run(QueryKind::VertexFace, query, options, coplanarity_cubic(QueryKind::VertexFace, query));
 }
 
 Result edge_edge_ccd(const EdgeEdgeQuery& query, const Options& options) {
-  return run(QueryKind::EdgeEdge, query, options);
+  return run(QueryKind::EdgeEdge, query, options, coplanarity_cubic(QueryKind::EdgeEdge, query));
 }
 
 Result elementary_ccd(QueryKind kind, const Query& query, const Options& options) {
-  return run(kind, query, options);
+  return run(kind, query, options, coplanarity_cubic(kind, query));
+}
+
+Result elementary_ccd(QueryKind kind, const Query& query, const Options& options, const CoplanarityCubic& cubic) {
+  return run(kind, query, options, cubic);
 }
 
 }  // namespace drape::ccd

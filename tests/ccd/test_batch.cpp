@@ -24,12 +24,17 @@ TEST(Batch, MatchesElementaryCallsAndCounts) {
     for (std::size_t i = 0; i < vf.size(); ++i) {
       const Result r = vertex_face_ccd(gather(input, vf[i]), options);
       EXPECT_EQ(r.hit, out.vertex_face[i].hit);
-      EXPECT_EQ(r.toc, out.vertex_face[i].toc);
+      EXPECT_EQ(r.toc, out.vertex_face[i].toc);  // bit for bit: the batch computes the same cubics
+      EXPECT_EQ(r.params, out.vertex_face[i].params);
+      EXPECT_EQ(r.path, out.vertex_face[i].path);
       expected.add(r);
     }
     for (std::size_t i = 0; i < ee.size(); ++i) {
       const Result r = edge_edge_ccd(gather(input, ee[i]), options);
       EXPECT_EQ(r.hit, out.edge_edge[i].hit);
+      EXPECT_EQ(r.toc, out.edge_edge[i].toc);
+      EXPECT_EQ(r.params, out.edge_edge[i].params);
+      EXPECT_EQ(r.path, out.edge_edge[i].path);
       expected.add(r);
     }
     EXPECT_EQ(out.counters.tests, vf.size() + ee.size());
@@ -38,7 +43,16 @@ TEST(Batch, MatchesElementaryCallsAndCounts) {
     EXPECT_EQ(out.counters.hits, expected.hits);
     EXPECT_EQ(out.counters.root_solves, expected.root_solves);
     EXPECT_EQ(out.counters.degenerate, expected.degenerate);
-    if (method == Method::Cubic) EXPECT_EQ(out.counters.culled, 0u);
-    if (method == Method::Vincent) EXPECT_GT(out.counters.culled, out.counters.tests / 2);
+    if (method == Method::Cubic) {
+      EXPECT_EQ(out.counters.culled, 0u);
+    }
+    if (method == Method::Vincent) {
+      EXPECT_GT(out.counters.culled, out.counters.tests / 2);
+    }
+    // Two threads split the tests into other chunks: the same results.
+    const BatchOutput two = run_batch(input, options, 2);
+    for (std::size_t i = 0; i < vf.size(); ++i) EXPECT_EQ(two.vertex_face[i].toc, out.vertex_face[i].toc);
+    for (std::size_t i = 0; i < ee.size(); ++i) EXPECT_EQ(two.edge_edge[i].toc, out.edge_edge[i].toc);
+    EXPECT_EQ(two.counters.culled, out.counters.culled);
   }
 }

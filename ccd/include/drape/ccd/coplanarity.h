@@ -90,6 +90,19 @@ inline CoplanarityCubic coplanarity_cubic(QueryKind kind, const Query& query) {
   return coplanarity_cubic_in<Scalar>(kind, query);
 }
 
+/// The filter's cull, shared by dnf and vincent: the cubic is resolved (its coefficients are
+/// not all within POORLY_RESOLVED_RATIO of their error bound), has one strict sign, and both
+/// its ends are clear of their rounding error, so d(t) has no root on [0, 1].
+inline constexpr Scalar POORLY_RESOLVED_RATIO = 2048.0;
+inline bool cubic_poorly_resolved(const CoplanarityCubic& c) { return max_abs(c.b) <= POORLY_RESOLVED_RATIO * c.error; }
+inline bool filter_culls(const CoplanarityCubic& c) {
+  return !cubic_poorly_resolved(c) & same_strict_sign(c.b) & (std::min(std::abs(c.b[0]), std::abs(c.b[3])) > c.error);
+}
+
+/// elementary_ccd with the cubic already computed: it must equal coplanarity_cubic(kind, query)
+/// bit for bit (the batch entry point computes the cubics of many tests at once).
+Result elementary_ccd(QueryKind kind, const Query& query, const Options& options, const CoplanarityCubic& cubic);
+
 /// Power-basis coefficients a0..a3 by the formulas of the paper (Provot's form). Used to check
 /// the Bernstein form.
 Power3 coplanarity_power(QueryKind kind, const Query& query);
