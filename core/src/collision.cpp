@@ -205,7 +205,7 @@ struct CollisionPipeline::Impl {
     const long pairs_before = counters.bvh_pairs;
     ccd::Candidates c = candidates(model.scene.collisions.thickness, counters);
     const ccd::BatchInput input{start, end, c.vertex_face, c.edge_edge};
-    if (observer && keep) observer(input, counters.bvh_pairs - pairs_before);
+    if (observer) observer(input, counters.bvh_pairs - pairs_before);
     const ccd::BatchOutput out = ccd::run_batch(input, options, settings.threads);
     counters.tests += out.counters;
     counters.vf_tests += long(c.vertex_face.size());

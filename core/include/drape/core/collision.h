@@ -60,9 +60,9 @@ class CollisionPipeline {
   /// obstacle collisions on): a scene pays only for what it asks for.
   static bool needed(const Model& model);
 
-  /// Called with the first detection round's elementary tests of every resolve and the count
-  /// of overlapping triangle pairs they came from (the benchmarks measure each CCD method on
-  /// exactly these).
+  /// Called with the elementary tests of every detection round (the first of a step, then one
+  /// after each impulse or impact-zone round) and the count of overlapping triangle pairs they
+  /// came from: the benchmarks measure each CCD method on exactly these.
   using Observer = std::function<void(const ccd::BatchInput&, long triangle_pairs)>;
   void set_observer(Observer observer);
 
