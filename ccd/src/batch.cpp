@@ -1,6 +1,7 @@
 #include "drape/ccd/batch.h"
 
 #include <tbb/blocked_range.h>
+#include <tbb/combinable.h>
 #include <tbb/parallel_for.h>
 #include <tbb/task_arena.h>
 
@@ -65,6 +66,10 @@ struct ChunkCubics {
   // The differences x2 - x1, x3 - x1, x4 - x1 (A, B, C) at t = 0 and t = 1, per coordinate.
   alignas(64) Scalar a0[3][CHUNK], a1[3][CHUNK], b0[3][CHUNK], b1[3][CHUNK], c0[3][CHUNK], c1[3][CHUNK];
   alignas(64) Scalar coefficient[4][CHUNK], error[CHUNK], extent[CHUNK];
+  alignas(64) std::int64_t culled[CHUNK];  // filter_culls of each cubic (64 bits: the SIMD lanes of the doubles)
+  // The conservative method's first question at zero thickness: resolved, and every
+  // coefficient beyond its error with one sign (certainly_nonzero on the whole step).
+  alignas(64) std::int64_t certainly_apart[CHUNK];
 };
 
 std::array<std::int32_t, 4> points(const VertexFacePair& p) { return {p.vertex, p.face[0], p.face[1], p.face[2]}; }
@@ -97,16 +102,33 @@ __attribute__((target_clones("avx2", "default"))) void compute_cubics(ChunkCubic
     const Scalar a = l1(c.a0, c.a1), b = l1(c.b0, c.b1), cc = l1(c.c0, c.c1);
     c.error[i] = Scalar(COPLANARITY_ERROR_FACTOR) * unit_roundoff * a * b * cc;
     c.extent[i] = std::max(std::max(a, b), cc);
+    // filter_culls, written out on the arrays.
+    const Scalar k0 = c.coefficient[0][i], k1 = c.coefficient[1][i], k2 = c.coefficient[2][i], k3 = c.coefficient[3][i];
+    const Scalar largest = std::max(std::max(std::abs(k0), std::abs(k1)), std::max(std::abs(k2), std::abs(k3)));
+    const Scalar lo = std::min(std::min(k0, k1), std::min(k2, k3)), hi = std::max(std::max(k0, k1), std::max(k2, k3));
+    const bool resolved = !(largest <= POORLY_RESOLVED_RATIO * c.error[i]);
+    const bool one_sign = (lo > 0) | (hi < 0);
+    const bool ends_clear = std::min(std::abs(k0), std::abs(k3)) > c.error[i];
+    c.culled[i] = std::int64_t(resolved & one_sign & ends_clear);
+    const Scalar e = c.error[i];
+    const bool all_above = (k0 > e) & (k1 > e) & (k2 > e) & (k3 > e), all_below = (k0 < -e) & (k1 < -e) & (k2 < -e) & (k3 < -e);
+    c.certainly_apart[i] = std::int64_t(resolved & (all_above | all_below));
   }
 }
 
 // The tests [begin, end) of one kind: cubics a chunk at a time; dnf and vincent decide the
 // culled ones from the cubic alone, everything else runs the full method on the gathered query.
+// out must hold Result{} in [begin, end) already (a culled test leaves its slot as it is).
+// Returns the counters of the range.
 template <class Pair>
-void run_range(const BatchInput& input, std::span<const Pair> pairs, QueryKind kind, const Options& options,
-               std::size_t begin, std::size_t end, Result* out) {
+BatchCounters run_range(const BatchInput& input, std::span<const Pair> pairs, QueryKind kind, const Options& options,
+                        std::size_t begin, std::size_t end, Result* out) {
+  BatchCounters counters;
   const auto order = coplanarity_order(kind);
   const bool filter = options.method == Method::Dnf || options.method == Method::Vincent;
+  // The conservative method ends a test at its first question when, at zero thickness, the
+  // cubic is certainly nonzero on the whole step: the result it returns then is written here.
+  const bool conservative_first = options.method == Method::Conservative && options.thickness == 0;
   ChunkCubics c;
   for (std::size_t first = begin; first < end; first += CHUNK) {
     const std::size_t n = std::min(CHUNK, end - first);
@@ -127,17 +149,28 @@ void run_range(const BatchInput& input, std::span<const Pair> pairs, QueryKind k
     }
     compute_cubics(c, n);
     for (std::size_t i = 0; i < n; ++i) {
+      if (filter && c.culled[i]) {
+        ++counters.tests;
+        ++counters.culled;
+        continue;
+      }
+      if (conservative_first && c.certainly_apart[i]) {
+        out[first + i].root_solves = 1;  // the one interval it examined
+        ++counters.tests;
+        ++counters.culled;
+        ++counters.root_solves;
+        continue;
+      }
       CoplanarityCubic cubic;
       for (int k = 0; k < 4; ++k) cubic.b[k] = c.coefficient[k][i];
       cubic.error = c.error[i];
       cubic.extent = c.extent[i];
-      if (filter && filter_culls(cubic)) {
-        out[first + i] = Result{};
-        continue;
-      }
+      assert(bool(c.culled[i]) == filter_culls(cubic));
       out[first + i] = elementary_ccd(kind, gather(input, pairs[first + i]), options, cubic);
+      counters.add(out[first + i]);
     }
   }
+  return counters;
 }
 
 }  // namespace
@@ -145,28 +178,29 @@ void run_range(const BatchInput& input, std::span<const Pair> pairs, QueryKind k
 BatchOutput run_batch(const BatchInput& input, const Options& options, int threads) {
   assert(input.start.size() == input.end.size());
   BatchOutput out;
-  out.vertex_face.resize(input.vertex_face.size());
+  out.vertex_face.resize(input.vertex_face.size());  // every slot Result{}: what a culled test leaves
   out.edge_edge.resize(input.edge_edge.size());
   const auto vertex_face = [&](std::size_t begin, std::size_t end) {
-    run_range(input, input.vertex_face, QueryKind::VertexFace, options, begin, end, out.vertex_face.data());
+    return run_range(input, input.vertex_face, QueryKind::VertexFace, options, begin, end, out.vertex_face.data());
   };
   const auto edge_edge = [&](std::size_t begin, std::size_t end) {
-    run_range(input, input.edge_edge, QueryKind::EdgeEdge, options, begin, end, out.edge_edge.data());
+    return run_range(input, input.edge_edge, QueryKind::EdgeEdge, options, begin, end, out.edge_edge.data());
   };
   if (threads <= 1) {
-    vertex_face(0, out.vertex_face.size());
-    edge_edge(0, out.edge_edge.size());
+    out.counters += vertex_face(0, out.vertex_face.size());
+    out.counters += edge_edge(0, out.edge_edge.size());
   } else {
+    // Counters are integer sums: the same whatever the split and the order of the ranges.
+    tbb::combinable<BatchCounters> partial;
     tbb::task_arena arena(threads);
     arena.execute([&] {
       tbb::parallel_for(tbb::blocked_range<std::size_t>(0, out.vertex_face.size(), GRAIN),
-                        [&](const auto& r) { vertex_face(r.begin(), r.end()); });
+                        [&](const auto& r) { partial.local() += vertex_face(r.begin(), r.end()); });
       tbb::parallel_for(tbb::blocked_range<std::size_t>(0, out.edge_edge.size(), GRAIN),
-                        [&](const auto& r) { edge_edge(r.begin(), r.end()); });
+                        [&](const auto& r) { partial.local() += edge_edge(r.begin(), r.end()); });
     });
+    partial.combine_each([&](const BatchCounters& c) { out.counters += c; });
   }
-  for (const Result& r : out.vertex_face) out.counters.add(r);
-  for (const Result& r : out.edge_edge) out.counters.add(r);
   return out;
 }
 
