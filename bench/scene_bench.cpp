@@ -34,6 +34,7 @@ struct Frame {
   int number = 0;
   long triangle_pairs = 0;
   std::vector<Batch> batches;
+  std::vector<std::size_t> differing;  // tests (frame order) where the methods' hits differ
   std::size_t vertex_face() const {
     std::size_t n = 0;
     for (const Batch& b : batches) n += b.vertex_face.size();
@@ -95,8 +96,9 @@ Located locate(const Frame& frame, std::size_t i) {
   return {nullptr, false, 0};
 }
 
-// Writes up to limit tests of each kind of the frame (an even sample when there are more) in
-// the public query format; the truth column holds the conservative method's verdict.
+// Writes up to limit tests of each kind of the frame (an even sample when there are more), and
+// every test where the methods differ, in the public query format; the truth column holds the
+// conservative method's verdict.
 void dump_frame(const Frame& frame, const fs::path& dir, const std::string& stem, std::size_t limit) {
   ccd::Options conservative;
   conservative.method = ccd::Method::Conservative;
@@ -107,22 +109,29 @@ void dump_frame(const Frame& frame, const fs::path& dir, const std::string& stem
     const std::size_t stride = std::max<std::size_t>(1, (total + limit - 1) / std::max<std::size_t>(limit, 1));
     ccd::QueryFile file;
     file.kind = kind;
-    std::size_t i = 0;
+    std::size_t i = 0, global = 0;  // index among the kind's tests, and in frame order
+    auto differing = frame.differing.begin();
     for (const Batch& b : frame.batches) {
       const ccd::BatchInput input{b.start, b.end, b.vertex_face, b.edge_edge};
       const std::size_t n = vf ? b.vertex_face.size() : b.edge_edge.size();
+      const std::size_t offset = vf ? 0 : b.vertex_face.size();  // the kind's tests within the batch
       for (std::size_t k = 0; k < n; ++k, ++i) {
-        if (i % stride != 0) continue;
+        const std::size_t at = global + offset + k;
+        while (differing != frame.differing.end() && *differing < at) ++differing;
+        const bool differs = differing != frame.differing.end() && *differing == at;
+        if (i % stride != 0 && !differs) continue;
         const ccd::Query q = vf ? ccd::Query(ccd::gather(input, b.vertex_face[k])) : ccd::Query(ccd::gather(input, b.edge_edge[k]));
         file.queries.push_back(q);
         file.truth.push_back(ccd::elementary_ccd(kind, q, conservative).hit);
       }
+      global += b.tests();
     }
     const fs::path folder = dir / std::string(ccd::kind_name(kind));
     fs::create_directories(folder);
     file.path = folder / (stem + ".csv");
     ccd::write_query_file(file.path, file);
-    std::printf("wrote %s: %zu of the frame's %zu %s tests, %ld with contact (conservative's verdict)\n",
+    std::printf("wrote %s: %zu of the frame's %zu %s tests (a sample and every difference), %ld with contact "
+                "(conservative's verdict)\n",
                 file.path.c_str(), file.queries.size(), total, std::string(ccd::kind_name(kind)).c_str(),
                 long(std::count(file.truth.begin(), file.truth.end(), true)));
   }
@@ -232,6 +241,7 @@ int main(int argc, char** argv) {
       const bool beyond_conservative = runs[CONSERVATIVE].hits[i] < runs[VINCENT].hits[i];
       diff += filter_differs;
       near += beyond_conservative;
+      if (filter_differs || beyond_conservative) current.differing.push_back(i);
       if ((filter_differs && diff <= 10) || (beyond_conservative && near <= 3)) {
         const Located at = locate(current, i);
         std::printf("  differs: frame %d %s test %zu: cubic %d dnf %d vincent %d conservative %d\n", f,
