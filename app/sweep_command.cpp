@@ -16,6 +16,7 @@ struct SweepArguments {
   std::vector<std::string> methods{"vincent", "conservative"};
   std::vector<double> thickness;
   std::vector<int> impulses;
+  std::vector<int> zones;
   int reference_steps = 0;
   std::string out;
   bool plot = true;
@@ -50,6 +51,8 @@ int sweep(const SweepArguments& args) {
   if (grid.thickness.empty()) grid.thickness = {scene.collisions.thickness};
   grid.max_impulse_iterations = args.impulses;
   if (grid.max_impulse_iterations.empty()) grid.max_impulse_iterations = {scene.collisions.max_impulse_iterations};
+  grid.max_zone_iterations = args.zones;
+  if (grid.max_zone_iterations.empty()) grid.max_zone_iterations = {scene.collisions.max_zone_iterations};
 
   // The reference: the most accurate setting the knobs allow.
   SweepSetting reference;
@@ -63,6 +66,9 @@ int sweep(const SweepArguments& args) {
   reference.max_impulse_iterations =
       std::max(scene.collisions.max_impulse_iterations,
                *std::max_element(grid.max_impulse_iterations.begin(), grid.max_impulse_iterations.end()));
+  reference.max_zone_iterations =
+      std::max(scene.collisions.max_zone_iterations,
+               *std::max_element(grid.max_zone_iterations.begin(), grid.max_zone_iterations.end()));
 
   const std::string name = std::filesystem::path(args.scene).stem().string();
   const std::filesystem::path out = args.out.empty() ? std::filesystem::path("out") / (name + "_sweep") : std::filesystem::path(args.out);
@@ -79,7 +85,7 @@ int sweep(const SweepArguments& args) {
   std::vector<SweepResult> results;
   try {
     results = run_sweep(scene, reference, settings, args.frames, [&](const SweepResult& r, std::size_t done, std::size_t total) {
-      std::printf("[%zu/%zu] %-62s %9.1f ms/frame  rms %.3e m  max %.3e m  pen %ld%s%s\n", done, total,
+      std::printf("[%zu/%zu] %-72s %9.1f ms/frame  rms %.3e m  max %.3e m  pen %ld%s%s\n", done, total,
                   (r.reference ? "reference " + r.setting.label() : r.setting.label()).c_str(), r.wall_ms_per_frame,
                   r.rms_error, r.max_error, r.penetrations, r.failed ? "  FAILED: " : "", r.failure.c_str());
       std::fflush(stdout);
@@ -98,7 +104,7 @@ int sweep(const SweepArguments& args) {
     if (r.pareto) front.push_back(&r);
   std::sort(front.begin(), front.end(), [](auto* a, auto* b) { return a->wall_ms_per_frame < b->wall_ms_per_frame; });
   for (const SweepResult* r : front)
-    std::printf("  %-62s %9.1f ms/frame  rms %.3e m\n", r->setting.label().c_str(), r->wall_ms_per_frame, r->rms_error);
+    std::printf("  %-72s %9.1f ms/frame  rms %.3e m\n", r->setting.label().c_str(), r->wall_ms_per_frame, r->rms_error);
   std::printf("table: %s\n", (out / "sweep.csv").c_str());
   if (args.plot) {
     const std::string why = plot_sweep(out / "sweep.png", results, "drape sweep " + name + ": time against error, " +
@@ -136,9 +142,12 @@ Command add_sweep_command(CLI::App& app) {
   cmd->add_option("--impulses", args->impulses, "max_impulse_iterations values to try (default: the scene's)")
       ->delimiter(',')
       ->check(CLI::Range(0, 1000));
+  cmd->add_option("--zones", args->zones, "max_zone_iterations values to try (default: the scene's)")
+      ->delimiter(',')
+      ->check(CLI::Range(0, 1000));
   cmd->add_option("--reference-steps", args->reference_steps,
                   "Steps per frame of the reference run (default: twice the most tried); the reference also uses "
-                  "cholmod, the conservative CCD method and the scene's thickness")
+                  "cholmod, the conservative CCD method, the scene's thickness and the most impulse and zone rounds")
       ->check(CLI::Range(1, 100000));
   cmd->add_option("--out", args->out, "Output folder (default: out/<scene>_sweep)");
   cmd->add_flag("!--no-plot", args->plot, "Write the table only");

@@ -19,7 +19,8 @@ std::string SweepSetting::label() const {
   out << "steps=" << frame_steps << " solver=";
   if (solver.kind == SolverKind::Cholmod) out << "cholmod";
   else out << "cg:" << solver.tolerance;
-  out << " ccd=" << ccd::method_name(method) << " thickness=" << thickness << " impulses=" << max_impulse_iterations;
+  out << " ccd=" << ccd::method_name(method) << " thickness=" << thickness << " impulses=" << max_impulse_iterations
+      << " zones=" << max_zone_iterations;
   return out.str();
 }
 
@@ -29,7 +30,8 @@ std::vector<SweepSetting> SweepGrid::settings() const {
     for (const SolverSpec& solver : solvers)
       for (ccd::Method method : methods)
         for (Scalar t : thickness)
-          for (int impulses : max_impulse_iterations) out.push_back({steps, solver, method, t, impulses});
+          for (int impulses : max_impulse_iterations)
+            for (int zones : max_zone_iterations) out.push_back({steps, solver, method, t, impulses, zones});
   return out;
 }
 
@@ -66,6 +68,7 @@ Scene with_setting(Scene scene, const SweepSetting& s) {
   scene.collisions.method = s.method;
   scene.collisions.thickness = s.thickness;
   scene.collisions.max_impulse_iterations = s.max_impulse_iterations;
+  scene.collisions.max_zone_iterations = s.max_zone_iterations;
   return scene;
 }
 
@@ -163,7 +166,7 @@ void mark_pareto_front(std::vector<SweepResult>& results) {
 }
 
 std::string sweep_csv_header() {
-  return "reference,frame_steps,solver,cg_tolerance,method,thickness,max_impulse_iterations,frames_done,failed,"
+  return "reference,frame_steps,solver,cg_tolerance,method,thickness,max_impulse_iterations,max_zone_iterations,frames_done,failed,"
          "wall_ms_per_frame,rms_error_m,max_error_m,energy_error_j,energy_drift_j,penetrations,pareto,failure";
 }
 
@@ -172,11 +175,11 @@ std::string sweep_csv_row(const SweepResult& r) {
   std::string failure = r.failure;
   std::replace(failure.begin(), failure.end(), '"', '\'');
   char row[512];
-  std::snprintf(row, sizeof row, "%d,%d,%s,%.3g,%s,%.6g,%d,%d,%d,%.3f,%.6e,%.6e,%.6e,%.6e,%ld,%d,", int(r.reference),
+  std::snprintf(row, sizeof row, "%d,%d,%s,%.3g,%s,%.6g,%d,%d,%d,%d,%.3f,%.6e,%.6e,%.6e,%.6e,%ld,%d,", int(r.reference),
                 s.frame_steps, s.solver.kind == SolverKind::Cholmod ? "cholmod" : "cg",
                 s.solver.kind == SolverKind::Cholmod ? 0.0 : double(s.solver.tolerance),
                 std::string(ccd::method_name(s.method)).c_str(), double(s.thickness), s.max_impulse_iterations,
-                r.frames_done, int(r.failed), r.wall_ms_per_frame, r.rms_error, r.max_error, r.energy_error,
+                s.max_zone_iterations, r.frames_done, int(r.failed), r.wall_ms_per_frame, r.rms_error, r.max_error, r.energy_error,
                 r.energy_drift, r.penetrations, int(r.pareto));
   return row + (failure.empty() ? std::string() : "\"" + failure + "\"");
 }

@@ -28,10 +28,11 @@ TEST(Sweep, GridIsTheProductOfTheKnobs) {
   grid.methods = {ccd::Method::Vincent, ccd::Method::Conservative};
   grid.thickness = {0.005};
   grid.max_impulse_iterations = {4, 8};
+  grid.max_zone_iterations = {16};
   const auto settings = grid.settings();
-  EXPECT_EQ(settings.size(), 3u * 2 * 2 * 1 * 2);
-  EXPECT_EQ(settings.front().label(), "steps=5 solver=cholmod ccd=vincent thickness=0.005 impulses=4");
-  EXPECT_EQ(settings.back().label(), "steps=20 solver=cg:0.0001 ccd=conservative thickness=0.005 impulses=8");
+  EXPECT_EQ(settings.size(), 3u * 2 * 2 * 1 * 2 * 1);
+  EXPECT_EQ(settings.front().label(), "steps=5 solver=cholmod ccd=vincent thickness=0.005 impulses=4 zones=16");
+  EXPECT_EQ(settings.back().label(), "steps=20 solver=cg:0.0001 ccd=conservative thickness=0.005 impulses=8 zones=16");
 }
 
 TEST(Sweep, SolverSettings) {

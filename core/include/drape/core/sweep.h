@@ -19,7 +19,8 @@ struct SweepSetting {
   ccd::Method method = ccd::Method::Vincent;
   Scalar thickness = 0.005;      ///< m
   int max_impulse_iterations = 8;
-  /// "steps=10 solver=cg:1e-06 ccd=vincent thickness=0.005 impulses=8"
+  int max_zone_iterations = 16;
+  /// "steps=10 solver=cg:1e-06 ccd=vincent thickness=0.005 impulses=8 zones=16"
   std::string label() const;
 };
 
@@ -30,6 +31,7 @@ struct SweepGrid {
   std::vector<ccd::Method> methods;
   std::vector<Scalar> thickness;
   std::vector<int> max_impulse_iterations;
+  std::vector<int> max_zone_iterations;
   std::vector<SweepSetting> settings() const;
 };
 
