@@ -34,7 +34,9 @@ void expect_all_methods(QueryKind kind, const Query& q, bool hit, Scalar toc = -
   for (Method m : ALL_METHODS) {
     const Result r = run(m, kind, q);
     EXPECT_EQ(r.hit, hit) << method_name(m);
-    if (hit && toc >= 0) EXPECT_NEAR(r.toc, toc, 1e-6) << method_name(m);
+    if (hit && toc >= 0) {
+      EXPECT_NEAR(r.toc, toc, 1e-6) << method_name(m);
+    }
   }
 }
 

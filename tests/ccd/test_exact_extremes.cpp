@@ -133,7 +133,9 @@ TEST(ExactExtremes, ConservativeMissesNoExactContactAtAnyScale) {
             options.method = m;
             const Result r = elementary_ccd(kind, b.query, options);
             if (!r.hit) ++misses[int(m)];
-            if (m == Method::Conservative && r.hit) EXPECT_LE(r.toc, b.t.get_d() + 1e-12);  // never later than the contact
+            if (m == Method::Conservative && r.hit) {
+              EXPECT_LE(r.toc, b.t.get_d() + 1e-12);  // never later than the contact
+            }
             if (std::getenv("DRAPE_DEBUG_EXACT") && m == Method::Vincent && !r.hit) {
               Options c;
               c.method = Method::Cubic;
