@@ -24,17 +24,6 @@ struct CcdArguments {
   ccd::EvaluationSettings settings;
 };
 
-// CLI11's ranges let NaN through (every comparison with it is false), and a tolerance or
-// thickness must be a finite number.
-const CLI::Validator FINITE_NUMBER(
-    [](std::string& input) {
-      char* end = nullptr;
-      const double value = std::strtod(input.c_str(), &end);
-      if (input.empty() || *end != '\0' || !std::isfinite(value)) return "expected a finite number, found '" + input + "'";
-      return std::string();
-    },
-    "FINITE");
-
 // Files named on the command line; a folder stands for every .csv file below it, in name order.
 std::vector<fs::path> expand_inputs(const std::vector<std::string>& inputs) {
   std::vector<fs::path> files;

@@ -4,6 +4,8 @@
 /// returns the function that runs it; the function returns the process exit status.
 
 #include <CLI/CLI.hpp>
+#include <cmath>
+#include <cstdlib>
 #include <filesystem>
 #include <functional>
 #include <string>
@@ -17,6 +19,18 @@ inline constexpr int EXIT_BAD_INPUT = 2;     ///< a flag, scene, mesh or query f
 inline constexpr int EXIT_RUN_STOPPED = 3;   ///< a simulation had to stop (or was interrupted)
 
 using Command = std::function<int()>;
+
+// CLI11's ranges let NaN through (every comparison with it is false), and a tolerance or
+// thickness must be a finite number.
+inline const CLI::Validator FINITE_NUMBER(
+    [](std::string& input) {
+      char* end = nullptr;
+      const double value = std::strtod(input.c_str(), &end);
+      if (input.empty() || *end != '\0' || !std::isfinite(value)) return "expected a finite number, found '" + input + "'";
+      return std::string();
+    },
+    "FINITE");
+
 
 Command add_ccd_command(CLI::App& app);
 Command add_run_command(CLI::App& app);

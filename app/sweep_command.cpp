@@ -34,6 +34,8 @@ int sweep(const SweepArguments& args) {
   grid.frame_steps = args.steps;
   if (grid.frame_steps.empty())
     grid.frame_steps = {std::max(1, scene.frame_steps / 2), scene.frame_steps, 2 * scene.frame_steps};
+  std::sort(grid.frame_steps.begin(), grid.frame_steps.end());  // a scene of 1 step: {1, 1, 2}
+  grid.frame_steps.erase(std::unique(grid.frame_steps.begin(), grid.frame_steps.end()), grid.frame_steps.end());
   try {
     for (const std::string& s : args.solvers) grid.solvers.push_back(parse_solver_setting(s, scene.solver));
   } catch (const std::invalid_argument& e) {
@@ -41,13 +43,7 @@ int sweep(const SweepArguments& args) {
     return EXIT_BAD_INPUT;
   }
   for (const std::string& m : args.methods) grid.methods.push_back(*ccd::parse_method(m));
-  for (double t : args.thickness) {
-    if (!(t >= 0 && t <= 1)) {
-      std::cerr << "drape sweep: --thickness: expected values from 0 to 1 m\n";
-      return EXIT_BAD_INPUT;
-    }
-    grid.thickness.push_back(t);
-  }
+  for (double t : args.thickness) grid.thickness.push_back(t);
   if (grid.thickness.empty()) grid.thickness = {scene.collisions.thickness};
   grid.max_impulse_iterations = args.impulses;
   if (grid.max_impulse_iterations.empty()) grid.max_impulse_iterations = {scene.collisions.max_impulse_iterations};
@@ -55,14 +51,12 @@ int sweep(const SweepArguments& args) {
   if (grid.max_zone_iterations.empty()) grid.max_zone_iterations = {scene.collisions.max_zone_iterations};
 
   // The reference: the most accurate setting the knobs allow.
-  SweepSetting reference;
+  SweepSetting reference = setting_of(scene);
   reference.frame_steps = args.reference_steps > 0
                               ? args.reference_steps
                               : 2 * *std::max_element(grid.frame_steps.begin(), grid.frame_steps.end());
-  reference.solver = scene.solver;
   reference.solver.kind = SolverKind::Cholmod;
   reference.method = ccd::Method::Conservative;
-  reference.thickness = scene.collisions.thickness;
   reference.max_impulse_iterations =
       std::max(scene.collisions.max_impulse_iterations,
                *std::max_element(grid.max_impulse_iterations.begin(), grid.max_impulse_iterations.end()));
@@ -83,7 +77,7 @@ int sweep(const SweepArguments& args) {
               settings.size(), reference.label().c_str(), args.frames);
   std::fflush(stdout);
   std::vector<SweepResult> results;
-  try {
+  try {  // run_sweep stops after the reference when the reference fails
     results = run_sweep(scene, reference, settings, args.frames, [&](const SweepResult& r, std::size_t done, std::size_t total) {
       std::printf("[%zu/%zu] %-72s %9.1f ms/frame  rms %.3e m  max %.3e m  pen %ld%s%s\n", done, total,
                   (r.reference ? "reference " + r.setting.label() : r.setting.label()).c_str(), r.wall_ms_per_frame,
@@ -91,6 +85,11 @@ int sweep(const SweepArguments& args) {
       std::fflush(stdout);
     });
     write_sweep_csv(out / "sweep.csv", results);
+    if (results.front().failed) {
+      std::cerr << "drape sweep: the reference run stopped at " << results.front().failure
+                << "; nothing to compare with (" << (out / "sweep.csv").string() << " holds what it did)\n";
+      return EXIT_RUN_STOPPED;
+    }
   } catch (const SceneError& e) {
     std::cerr << "drape sweep: " << e.what() << "\n";
     return EXIT_BAD_INPUT;
@@ -138,6 +137,7 @@ Command add_sweep_command(CLI::App& app) {
       ->check(CLI::IsMember({"cubic", "dnf", "vincent", "conservative"}));
   cmd->add_option("--thickness", args->thickness, "Collision thicknesses to try, m (default: the scene's)")
       ->delimiter(',')
+      ->check(FINITE_NUMBER)
       ->check(CLI::Range(0.0, 1.0));
   cmd->add_option("--impulses", args->impulses, "max_impulse_iterations values to try (default: the scene's)")
       ->delimiter(',')

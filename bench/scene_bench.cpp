@@ -164,7 +164,7 @@ int main(int argc, char** argv) {
                  "Write the tests of one measured frame as query files DIR/vertex-face/*.csv and DIR/edge-edge/*.csv "
                  "(read back by `drape ccd DIR`); truth column: the conservative method's verdict");
   app.add_option("--dump-frame", dump_frame_number, "The frame to dump (default: the measured frame with most tests)");
-  app.add_option("--dump-limit", dump_limit, "At most this many tests of each kind (an even sample)")
+  app.add_option("--dump-limit", dump_limit, "An even sample of about this many tests of each kind, plus every test where the methods differ")
       ->capture_default_str()
       ->check(CLI::PositiveNumber);
   CLI11_PARSE(app, argc, argv);
@@ -187,7 +187,9 @@ int main(int argc, char** argv) {
     return 2;
   }
   Frame current;
+  bool measuring = false;  // only measured frames keep their tests (copies cost time and memory)
   integrator.collisions()->set_observer([&](const ccd::BatchInput& in, long triangle_pairs) {
+    if (!measuring) return;
     current.triangle_pairs += triangle_pairs;
     Batch& b = current.batches.emplace_back();
     b.start.assign(in.start.begin(), in.start.end());
@@ -215,6 +217,7 @@ int main(int argc, char** argv) {
   for (int f = 1; f <= frames; ++f) {
     current = Frame{};
     current.number = f;
+    measuring = f % every == 0;
     const auto frame_begin = std::chrono::steady_clock::now();
     for (int step = 0; step < model.scene.frame_steps; ++step) {
       const StepReport r = integrator.step(state);

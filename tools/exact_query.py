@@ -55,13 +55,15 @@ def split(b):
 def roots(b, lo=F(0), hi=F(1), depth=0, out=None):
     out = [] if out is None else out
     v = variations(b)
-    if b[0] == 0: out.append((lo, lo))
+    if depth == 0 and b[0] == 0: out.append((lo, lo))
     if depth == 0 and b[3] == 0: out.append((hi, hi))
     if v == 0: return out
     if v == 1 or depth > 60:
         out.append((lo, hi)); return out
     l, r = split(b); mid = (lo + hi) / 2
-    roots(l, lo, mid, depth + 1, out); roots(r, mid, hi, depth + 1, out)
+    roots(l, lo, mid, depth + 1, out)
+    if r[0] == 0: out.append((mid, mid))  # a root exactly at the split
+    roots(r, mid, hi, depth + 1, out)
     return out
 
 def seg_seg_sq(p0, p1, q0, q1):
@@ -107,7 +109,11 @@ def dist_sq(s, e, t, vf):
 if len(sys.argv) != 3:
     sys.exit('usage: exact_query.py FILE INDEX')
 path, index = sys.argv[1], int(sys.argv[2])
-vf = 'vertex-face' in path
+import os
+kinds = [part for part in os.path.abspath(path).split(os.sep)[:-1] if part in ('vertex-face', 'edge-edge')]
+if not kinds:
+    sys.exit(path + ': no parent folder is named vertex-face or edge-edge')
+vf = kinds[-1] == 'vertex-face'
 s, e = read(path, index)
 b = bernstein(s, e, vf)
 print('bernstein', [float(x) for x in b])

@@ -115,26 +115,39 @@ Candidates feature_pairs(std::span<const TriangleIndices> triangles_a, std::span
     for (std::size_t k = 1; k < vertices.size(); ++k) volume.merge(vertex_volumes[vertices[k]]);
     return volume;
   };
+  // Each triangle's face and edge volumes, once per call (a triangle is in many pairs).
+  struct TriangleVolumes {
+    FeatureVolume face;
+    std::array<FeatureVolume, 3> edge;  // edge i runs from corner i to corner i + 1
+  };
+  const auto volumes_of = [&](std::span<const TriangleIndices> triangles) {
+    std::vector<TriangleVolumes> volumes(cull ? triangles.size() : 0);
+    for (std::size_t t = 0; t < volumes.size(); ++t) {
+      const TriangleIndices& tri = triangles[t];
+      volumes[t].face = union_of(tri);
+      for (int i = 0; i < 3; ++i) volumes[t].edge[i] = union_of(std::array<std::int32_t, 2>{tri[i], tri[(i + 1) % 3]});
+    }
+    return volumes;
+  };
+  const std::vector<TriangleVolumes> volumes_a = volumes_of(triangles_a);
+  const bool same_triangles = triangles_a.data() == triangles_b.data() && triangles_a.size() == triangles_b.size();
+  const std::vector<TriangleVolumes> volumes_b = same_triangles ? std::vector<TriangleVolumes>{} : volumes_of(triangles_b);
+  const std::vector<TriangleVolumes>& of_b = same_triangles ? volumes_a : volumes_b;
   std::vector<std::array<std::int32_t, 4>> vf, ee;  // (vertex, face corners) and (edge, edge), canonical
   vf.reserve(pairs.size() * 6);
   ee.reserve(pairs.size() * 9);
   const auto shares = [](std::int32_t v, const TriangleIndices& t) { return v == t[0] || v == t[1] || v == t[2]; };
-  const auto add_vertex_face = [&](const TriangleIndices& from, const TriangleIndices& face) {
-    const FeatureVolume face_volume = cull ? union_of(face) : FeatureVolume{};
+  const auto add_vertex_face = [&](const TriangleIndices& from, const TriangleIndices& face, const FeatureVolume* face_volume) {
     for (std::int32_t v : from)
-      if (!shares(v, face) && (!cull || overlap(vertex_volumes[v], face_volume))) vf.push_back({v, face[0], face[1], face[2]});
+      if (!shares(v, face) && (!cull || overlap(vertex_volumes[v], *face_volume))) vf.push_back({v, face[0], face[1], face[2]});
   };
   for (const auto& [ia, ib] : pairs) {
     const TriangleIndices& a = triangles_a[ia];
     const TriangleIndices& b = triangles_b[ib];
-    add_vertex_face(a, b);
-    add_vertex_face(b, a);
-    std::array<FeatureVolume, 3> edge_box_a, edge_box_b;
-    if (cull)
-      for (int i = 0; i < 3; ++i) {
-        edge_box_a[i] = union_of(std::array<std::int32_t, 2>{a[i], a[(i + 1) % 3]});
-        edge_box_b[i] = union_of(std::array<std::int32_t, 2>{b[i], b[(i + 1) % 3]});
-      }
+    const TriangleVolumes* va = cull ? &volumes_a[ia] : nullptr;
+    const TriangleVolumes* vb = cull ? &of_b[ib] : nullptr;
+    add_vertex_face(a, b, cull ? &vb->face : nullptr);
+    add_vertex_face(b, a, cull ? &va->face : nullptr);
     for (int i = 0; i < 3; ++i) {
       std::array<std::int32_t, 2> e{a[i], a[(i + 1) % 3]};
       if (e[0] > e[1]) std::swap(e[0], e[1]);
@@ -142,7 +155,7 @@ Candidates feature_pairs(std::span<const TriangleIndices> triangles_a, std::span
         std::array<std::int32_t, 2> f{b[j], b[(j + 1) % 3]};
         if (f[0] > f[1]) std::swap(f[0], f[1]);
         if (e[0] == f[0] || e[0] == f[1] || e[1] == f[0] || e[1] == f[1]) continue;
-        if (cull && !overlap(edge_box_a[i], edge_box_b[j])) continue;
+        if (cull && !overlap(va->edge[i], vb->edge[j])) continue;
         // The same two edges can come from (a, b) or (b, a): order them.
         if (f < e) ee.push_back({f[0], f[1], e[0], e[1]});
         else ee.push_back({e[0], e[1], f[0], f[1]});

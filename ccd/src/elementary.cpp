@@ -88,7 +88,7 @@ Result cubic_method(const Problem& p) {
 Result dnf_method(const Problem& p) {
   // Unreliable roots first, as cubic does: the filter must not cull what cubic would find.
   if (cubic_poorly_resolved(p.cubic)) return degenerate_path(p);
-  if (filter_culls(p.cubic)) return Result{};
+  if (signs_cull(p.cubic)) return Result{};  // resolved: checked just above
   return cubic_method(p);
 }
 
@@ -101,7 +101,7 @@ Result vincent_method(const Problem& p) {
   const Bernstein3& b = p.cubic.b;
   // Unreliable roots first, as cubic does: the filter must not cull what cubic would find.
   if (cubic_poorly_resolved(p.cubic)) return degenerate_path(p);
-  if (filter_culls(p.cubic)) return Result{};
+  if (signs_cull(p.cubic)) return Result{};  // resolved: checked just above
   Result result;
   if (root_possible_at_start(p)) {  // the features may start coplanar
     result.path = Path::Solved;

@@ -52,12 +52,6 @@ inline Scalar max_abs_coordinate(const Query& q) {
   return m;
 }
 
-// Coefficients within POORLY_RESOLVED_RATIO (coplanarity.h) of their rounding-error bound
-// leave the cubic's roots unreliable (the motion is coplanar, or nearly, to working
-// precision): the root-finding methods then decide by distance instead (their degenerate path)
-// and the conservative method searches in long double. 2^11 is the gain of long double over
-// double.
-
 /// The conservative method, and the degenerate path of the others (use_cubic = false: the
 /// cubic says nothing, decide by distance alone).
 Result conservative_search(const Problem& p, bool use_cubic);

@@ -238,12 +238,8 @@ struct CollisionPipeline::Impl {
     const Scalar floor = 0.5 * model.scene.collisions.thickness;
     for (const Obstacle& obstacle : model.obstacles) {
       if (obstacle.spec.kind == ObstacleSpec::Kind::Mesh) continue;
-      for (int v = 0; v < cloth_vertices; ++v) {
-        if (!(inverse_mass[v] > 0)) continue;
-        const Vec3 predicted = start[v] + h * motion[v];
-        const SurfaceContact c = analytic_contact(obstacle, t_next, predicted);
-        if (c.signed_distance < floor) motion[v] = (predicted + (floor - c.signed_distance) * c.normal - start[v]) / h;
-      }
+      for (int v = 0; v < cloth_vertices; ++v)
+        if (inverse_mass[v] > 0) push_out(obstacle, t_next, start[v], h, floor, motion[v]);
     }
   }
 

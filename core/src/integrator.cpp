@@ -114,11 +114,10 @@ int respond_to_analytic_obstacles(const Model& model, const std::vector<Vec3>& s
     if (obstacle.spec.kind == ObstacleSpec::Kind::Mesh) continue;  // the collision pipeline's
     for (std::size_t v = 0; v < start.size(); ++v) {
       if (model.pin_of_vertex[v] >= 0) continue;
-      const Vec3 predicted = start[v] + h * motion[v];
-      const SurfaceContact c = analytic_contact(obstacle, t_next, predicted);
-      if (c.signed_distance >= thickness) continue;
+      const auto contact = push_out(obstacle, t_next, start[v], h, thickness, motion[v]);
+      if (!contact) continue;
       ++contacts;
-      motion[v] = (predicted + (thickness - c.signed_distance) * c.normal - start[v]) / h;
+      const SurfaceContact& c = *contact;
       const Vec3 relative = velocities[v] - c.surface_velocity;
       const Scalar normal_speed = relative.dot(c.normal);
       if (normal_speed >= 0) continue;  // already separating

@@ -51,4 +51,13 @@ Scalar distance_to_obstacle(const Obstacle& obstacle, Scalar t, const std::vecto
   return std::sqrt(best);
 }
 
+std::optional<SurfaceContact> push_out(const Obstacle& obstacle, Scalar t_next, const Vec3& start, Scalar h, Scalar depth,
+                                       Vec3& motion) {
+  const Vec3 predicted = start + h * motion;
+  const SurfaceContact c = analytic_contact(obstacle, t_next, predicted);
+  if (c.signed_distance >= depth) return std::nullopt;
+  motion = (predicted + (depth - c.signed_distance) * c.normal - start) / h;
+  return c;
+}
+
 }  // namespace drape

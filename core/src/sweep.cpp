@@ -1,6 +1,9 @@
 #include "drape/core/sweep.h"
 
+#include <sys/wait.h>
+
 #include <algorithm>
+#include <csignal>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -22,6 +25,11 @@ std::string SweepSetting::label() const {
   out << " ccd=" << ccd::method_name(method) << " thickness=" << thickness << " impulses=" << max_impulse_iterations
       << " zones=" << max_zone_iterations;
   return out.str();
+}
+
+SweepSetting setting_of(const Scene& scene) {
+  return {scene.frame_steps, scene.solver, scene.collisions.method, scene.collisions.thickness,
+          scene.collisions.max_impulse_iterations, scene.collisions.max_zone_iterations};
 }
 
 std::vector<SweepSetting> SweepGrid::settings() const {
@@ -137,6 +145,7 @@ std::vector<SweepResult> run_sweep(const Scene& scene, const SweepSetting& refer
   ref.reference = true;
   results.push_back(ref);
   if (on_result) on_result(results.back(), 1, total);
+  if (ref.failed) return results;
   for (const SweepSetting& setting : settings) {
     Trajectory trajectory;
     SweepResult r = simulate(scene, setting, frames, trajectory);
@@ -185,10 +194,17 @@ std::string sweep_csv_row(const SweepResult& r) {
 }
 
 void write_sweep_csv(const std::filesystem::path& path, const std::vector<SweepResult>& results) {
-  std::ofstream out(path);
-  out << sweep_csv_header() << "\n";
-  for (const SweepResult& r : results) out << sweep_csv_row(r) << "\n";
-  if (!out.flush()) throw std::runtime_error(path.string() + ": cannot write the sweep table");
+  std::filesystem::path partial = path;
+  partial += ".partial";  // renamed into place: never a half-written table
+  {
+    std::ofstream out(partial);
+    out << sweep_csv_header() << "\n";
+    for (const SweepResult& r : results) out << sweep_csv_row(r) << "\n";
+    if (!out.flush()) throw std::runtime_error(path.string() + ": cannot write the sweep table");
+  }
+  std::error_code error;
+  std::filesystem::rename(partial, path, error);
+  if (error) throw std::runtime_error(path.string() + ": cannot write the sweep table: " + error.message());
 }
 
 namespace {
@@ -215,6 +231,8 @@ std::string varying_label(const SweepSetting& s, const std::vector<SweepResult>&
 std::string plot_sweep(const std::filesystem::path& png, const std::vector<SweepResult>& results, const std::string& title) {
   // Errors of zero (a run equal to the reference) sit on the axis floor of the log scale.
   constexpr double FLOOR = 1e-12;
+  // A missing or dead gnuplot must surface as a failed plot, not kill drape with SIGPIPE.
+  std::signal(SIGPIPE, SIG_IGN);
   std::FILE* gnuplot = popen("gnuplot 2>&1", "w");
   if (!gnuplot) return "cannot start gnuplot";
   std::ostringstream script;
@@ -250,7 +268,8 @@ std::string plot_sweep(const std::filesystem::path& png, const std::vector<Sweep
   const std::string text = script.str();
   std::fwrite(text.data(), 1, text.size(), gnuplot);
   const int status = pclose(gnuplot);
-  if (status != 0) return "gnuplot failed (exit status " + std::to_string(status) + ")";
+  if (WIFEXITED(status) && WEXITSTATUS(status) == 127) return "gnuplot is not installed (Debian package gnuplot-nox)";
+  if (status != 0) return "gnuplot failed (status " + std::to_string(status) + ")";
   if (!std::filesystem::exists(png)) return "gnuplot wrote no " + png.string();
   return "";
 }

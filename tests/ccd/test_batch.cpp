@@ -30,6 +30,7 @@ TEST(Batch, MatchesElementaryCallsAndCounts) {
       EXPECT_EQ(r.toc, out.vertex_face[i].toc);  // bit for bit: the batch computes the same cubics
       EXPECT_EQ(r.params, out.vertex_face[i].params);
       EXPECT_EQ(r.path, out.vertex_face[i].path);
+      EXPECT_EQ(r.root_solves, out.vertex_face[i].root_solves);
       expected.add(r);
     }
     for (std::size_t i = 0; i < ee.size(); ++i) {
@@ -38,6 +39,7 @@ TEST(Batch, MatchesElementaryCallsAndCounts) {
       EXPECT_EQ(r.toc, out.edge_edge[i].toc);
       EXPECT_EQ(r.params, out.edge_edge[i].params);
       EXPECT_EQ(r.path, out.edge_edge[i].path);
+      EXPECT_EQ(r.root_solves, out.edge_edge[i].root_solves);
       expected.add(r);
     }
     EXPECT_EQ(out.counters.tests, vf.size() + ee.size());

@@ -1,6 +1,7 @@
 // The btDbvt broad phase and the candidate tests generated from triangle pairs.
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <random>
 #include <set>
 
@@ -105,25 +106,44 @@ TEST(FeaturePairs, FeatureVolumesDropOnlyPairsThatStayApart) {
   const auto volumes = vertex_volumes(start, end, MARGIN);
   const Candidates all = feature_pairs(tris, tris, pairs);
   const Candidates kept = feature_pairs(tris, tris, pairs, volumes);
-  const auto box_of = [&](std::initializer_list<std::int32_t> vertices) {
-    FeatureVolume b = volumes[*vertices.begin()];
-    for (auto v : vertices) b.merge(volumes[v]);
-    return b;
+  // Apart, computed here independently: some direction among x, y, z and the six face
+  // diagonals separates the two features' start and end points by more than twice the margin.
+  const std::vector<Vec3> directions{Vec3(1, 0, 0), Vec3(0, 1, 0), Vec3(0, 0, 1),  Vec3(1, 1, 0), Vec3(1, -1, 0),
+                                     Vec3(1, 0, 1), Vec3(1, 0, -1), Vec3(0, 1, 1), Vec3(0, 1, -1)};
+  const auto apart_along_an_axis = [&](std::initializer_list<std::int32_t> a, std::initializer_list<std::int32_t> b) {
+    for (const Vec3& d : directions) {
+      const auto range = [&](std::initializer_list<std::int32_t> vertices) {
+        Scalar lo = INFINITY, hi = -INFINITY;
+        for (auto v : vertices)
+          for (const Vec3& p : {start[v], end[v]}) lo = std::min(lo, p.dot(d)), hi = std::max(hi, p.dot(d));
+        return std::pair{lo, hi};
+      };
+      const auto [lo_a, hi_a] = range(a);
+      const auto [lo_b, hi_b] = range(b);
+      const Scalar gap = std::max(lo_b - hi_a, lo_a - hi_b) / d.norm();
+      if (gap > 2 * MARGIN * (1 + 1e-12)) return true;
+    }
+    return false;
   };
   Options near;
   near.method = Method::Conservative;
   near.thickness = 1.999 * MARGIN;
   const BatchInput input{start, end, {}, {}};
   std::size_t vf_kept = 0, ee_kept = 0;
+  std::set<std::array<std::int32_t, 4>> kept_vf, kept_ee;
+  for (const auto& p : kept.vertex_face) kept_vf.insert({p.vertex, p.face[0], p.face[1], p.face[2]});
+  for (const auto& p : kept.edge_edge) kept_ee.insert({p.edge_a[0], p.edge_a[1], p.edge_b[0], p.edge_b[1]});
   for (const auto& p : all.vertex_face) {
-    const bool apart = !overlap(volumes[p.vertex], box_of({p.face[0], p.face[1], p.face[2]}));
+    const bool apart = apart_along_an_axis({p.vertex}, {p.face[0], p.face[1], p.face[2]});
+    EXPECT_EQ(kept_vf.count({p.vertex, p.face[0], p.face[1], p.face[2]}), apart ? 0u : 1u);
     vf_kept += !apart;
     if (apart) {
       EXPECT_FALSE(vertex_face_ccd(gather(input, p), near).hit);
     }
   }
   for (const auto& p : all.edge_edge) {
-    const bool apart = !overlap(box_of({p.edge_a[0], p.edge_a[1]}), box_of({p.edge_b[0], p.edge_b[1]}));
+    const bool apart = apart_along_an_axis({p.edge_a[0], p.edge_a[1]}, {p.edge_b[0], p.edge_b[1]});
+    EXPECT_EQ(kept_ee.count({p.edge_a[0], p.edge_a[1], p.edge_b[0], p.edge_b[1]}), apart ? 0u : 1u);
     ee_kept += !apart;
     if (apart) {
       EXPECT_FALSE(edge_edge_ccd(gather(input, p), near).hit);

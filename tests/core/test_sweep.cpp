@@ -68,7 +68,7 @@ TEST(Sweep, ParetoFrontKeepsRunsNoOtherBeatsOnBoth) {
 // fewer steps per frame move the cloth elsewhere.
 TEST(Sweep, RunsAreMeasuredAgainstTheReference) {
   const Scene scene = load_scene(DRAPE_SOURCE_DIR "/scenes/hanging.json");
-  SweepSetting reference;
+  SweepSetting reference = setting_of(scene);
   reference.frame_steps = 4;
   reference.method = ccd::Method::Conservative;
   SweepSetting coarse = reference;

@@ -47,8 +47,8 @@ struct BatchOutput {
 };
 
 /// Runs every test of the batch with options.method, on up to threads threads (TBB). Each
-/// result lands at its pair's index and the counters are summed afterwards in order, so the
-/// output does not depend on the thread count. Indices must lie in [0, start.size()).
+/// result lands at its pair's index and the counters are summed per range of tests (integer
+/// sums), so the output does not depend on the thread count. Indices must lie in [0, start.size()).
 BatchOutput run_batch(const BatchInput& input, const Options& options, int threads = 1);
 
 /// The query of one pair, gathered from the vertex arrays.

@@ -90,14 +90,21 @@ inline CoplanarityCubic coplanarity_cubic(QueryKind kind, const Query& query) {
   return coplanarity_cubic_in<Scalar>(kind, query);
 }
 
-/// The filter's cull, shared by dnf and vincent: the cubic is resolved (its coefficients are
-/// not all within POORLY_RESOLVED_RATIO of their error bound), has one strict sign, and both
-/// its ends are clear of their rounding error, so d(t) has no root on [0, 1].
+/// Coefficients within this factor of their rounding-error bound leave the cubic's roots
+/// unreliable (the motion is coplanar, or nearly, to working precision): the root-finding
+/// methods then decide by distance instead (their degenerate path) and the conservative method
+/// searches in long double. 2^11 is the gain of long double over double.
 inline constexpr Scalar POORLY_RESOLVED_RATIO = 2048.0;
 inline bool cubic_poorly_resolved(const CoplanarityCubic& c) { return max_abs(c.b) <= POORLY_RESOLVED_RATIO * c.error; }
-inline bool filter_culls(const CoplanarityCubic& c) {
-  return !cubic_poorly_resolved(c) & same_strict_sign(c.b) & (std::min(std::abs(c.b[0]), std::abs(c.b[3])) > c.error);
+
+/// The sign part of the filter's cull: one strict sign, and both ends clear of their rounding
+/// error, so d(t) has no root on [0, 1]. Meaningful for a resolved cubic.
+inline bool signs_cull(const CoplanarityCubic& c) {
+  return same_strict_sign(c.b) & (std::min(std::abs(c.b[0]), std::abs(c.b[3])) > c.error);
 }
+
+/// The filter's cull, shared by dnf and vincent: a resolved cubic that signs_cull.
+inline bool filter_culls(const CoplanarityCubic& c) { return !cubic_poorly_resolved(c) & signs_cull(c); }
 
 /// elementary_ccd with the cubic already computed: it must equal coplanarity_cubic(kind, query)
 /// bit for bit (the batch entry point computes the cubics of many tests at once).

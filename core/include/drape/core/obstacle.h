@@ -3,6 +3,8 @@
 /// Obstacles posed at a time: where the analytic shapes are, how far a point is from them, and
 /// how fast their surface moves.
 
+#include <optional>
+
 #include "drape/core/model.h"
 
 namespace drape {
@@ -16,6 +18,12 @@ struct SurfaceContact {
 
 /// Sphere or plane at time t, seen from x.
 SurfaceContact analytic_contact(const Obstacle& obstacle, Scalar t, const Vec3& x);
+
+/// A vertex at start moving by h * motion over a step ending at t_next: when its end lies
+/// within depth of an analytic obstacle's surface, motion is changed so that it ends at depth
+/// along the surface normal, and the contact there is returned.
+std::optional<SurfaceContact> push_out(const Obstacle& obstacle, Scalar t_next, const Vec3& start, Scalar h, Scalar depth,
+                                       Vec3& motion);
 
 /// The velocity at time t of the obstacle's body point now at x (translation plus rotation).
 Vec3 body_velocity(const Motion& motion, const Vec3& x_now, Scalar t);

@@ -125,8 +125,9 @@ struct CollisionSpec {
   ccd::Method method = ccd::Method::Vincent;
   int max_impulse_iterations = 8;  ///< CCD-impulse rounds per step before impact zones
   int max_zone_iterations = 16;    ///< impact-zone rounds per step before the fail-safe
-  /// Drop the feature pairs of overlapping triangles whose own swept boxes are apart before
-  /// the narrow phase (ccd::feature_pairs). Changes the cost, never the contacts found.
+  /// Drop the feature pairs of overlapping triangles whose own swept 18-DOPs are apart before
+  /// the narrow phase (ccd::vertex_volumes, ccd::feature_pairs). Changes the cost, never the
+  /// contacts found.
   bool feature_boxes = true;
 };
 

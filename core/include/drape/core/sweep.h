@@ -14,15 +14,18 @@ namespace drape {
 
 /// One point of the grid: the scene's accuracy knobs.
 struct SweepSetting {
-  int frame_steps = 10;          ///< implicit steps per frame
+  int frame_steps = 0;           ///< implicit steps per frame
   SolverSpec solver;             ///< cholmod, or cg at a tolerance
   ccd::Method method = ccd::Method::Vincent;
-  Scalar thickness = 0.005;      ///< m
-  int max_impulse_iterations = 8;
-  int max_zone_iterations = 16;
+  Scalar thickness = 0;          ///< m
+  int max_impulse_iterations = 0;
+  int max_zone_iterations = 0;
   /// "steps=10 solver=cg:1e-06 ccd=vincent thickness=0.005 impulses=8 zones=16"
   std::string label() const;
 };
+
+/// The scene's own setting.
+SweepSetting setting_of(const Scene& scene);
 
 /// The values tried for each knob; the grid is their Cartesian product.
 struct SweepGrid {
@@ -57,7 +60,8 @@ struct SweepResult {
 
 /// Runs the reference (reference_setting) then every setting for frames frames, with the
 /// independent penetration check on every frame. on_result is called after each run (the
-/// reference first).
+/// reference first). When the reference stops early only its result is returned: there is
+/// nothing to compare the others with.
 std::vector<SweepResult> run_sweep(const Scene& scene, const SweepSetting& reference_setting,
                                    const std::vector<SweepSetting>& settings, int frames,
                                    const std::function<void(const SweepResult&, std::size_t done, std::size_t total)>& on_result);
