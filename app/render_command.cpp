@@ -1,4 +1,7 @@
 // drape render, and drape run --render: PNG frames and an MP4 of a run's saved meshes.
+#include <unistd.h>
+
+#include <algorithm>
 #include <chrono>
 #include <iostream>
 #include <regex>
@@ -60,6 +63,8 @@ int render_run(const fs::path& folder, const RenderOptions& options) {
         std::cerr << "drape render: warning: the ffmpeg program is not on the PATH: PNG frames only, no video\n";
     }
     const auto begin = std::chrono::steady_clock::now();
+    const bool terminal = isatty(STDERR_FILENO);
+    std::size_t done = 0;
     for (const auto& [frame, path] : frames) {
       const std::vector<Vec3> x = load_frame_positions(path, topology);
       const render::Image image = renderer->render(model, x, frame * model.scene.frame_time, camera);
@@ -67,12 +72,17 @@ int render_run(const fs::path& folder, const RenderOptions& options) {
       std::snprintf(name, sizeof name, "frame_%05d.png", frame);
       render::write_png(images / name, image);
       if (video) video->add(image);
-      if (!options.quiet) std::cerr << "\rdrape render: frame " << frame << "/" << frames.back().first << std::flush;
+      // On a terminal one line rewritten; in a log a line every tenth of the frames.
+      ++done;
+      if (!options.quiet && terminal)
+        std::cerr << "\rdrape render: frame " << frame << "/" << frames.back().first << std::flush;
+      else if (!options.quiet && (done % std::max<std::size_t>(1, frames.size() / 10) == 0))
+        std::cerr << "drape render: frame " << frame << "/" << frames.back().first << "\n";
     }
     if (video) video->close();
     if (!options.quiet) {
       const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - begin).count();
-      std::cerr << "\rdrape render: " << frames.size() << " frames (" << settings.width << "x" << settings.height << ", "
+      std::cerr << (terminal ? "\r" : "") << "drape render: " << frames.size() << " frames (" << settings.width << "x" << settings.height << ", "
                 << seconds * 1e3 / frames.size() << " ms a frame) in " << images.string() << "/";
       if (video) std::cerr << "; video: " << video_path.string();
       std::cerr << "\n";
