@@ -1,5 +1,7 @@
 #include "drape/core/model.h"
 
+#include <sstream>
+
 #include "drape/core/mesh_io.h"
 
 namespace drape {
@@ -127,6 +129,19 @@ Model build_model(const Scene& scene) {
   // Bounds: given, or everything at the start grown by 100 diagonals.
   if (scene.bounds) {
     model.bounds = *scene.bounds;
+    // The run stops as soon as a cloth vertex is outside the bounds, so a box that leaves out
+    // a cloth's start would stop every run at its first step.
+    for (std::size_t c = 0; c < model.cloths.size(); ++c) {
+      const ClothRange& range = model.cloths[c];
+      for (int v = range.first_vertex; v < range.first_vertex + range.vertex_count; ++v) {
+        const Vec3& x = model.initial_positions[v];
+        if (model.bounds.contains(x)) continue;
+        std::ostringstream where;
+        where << "expected a box holding every cloth's initial position; cloth " << c << " has a vertex at (" << x.x()
+              << ", " << x.y() << ", " << x.z() << ") outside it";
+        fail(scene, "/bounds", where.str());
+      }
+    }
   } else {
     Vec3 lo = model.initial_positions[0], hi = lo;
     const auto include = [&](const Vec3& p) { lo = lo.cwiseMin(p), hi = hi.cwiseMax(p); };

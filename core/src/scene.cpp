@@ -7,8 +7,6 @@
 #include <set>
 #include <sstream>
 
-#include "drape/core/mesh_io.h"
-
 namespace drape {
 
 Vec3 Transform::apply(const Vec3& x) const {
@@ -276,36 +274,6 @@ ObstacleSpec read_obstacle(const Node& n) {
   return o;
 }
 
-// The run stops as soon as a cloth vertex is outside the bounds, so a box that leaves out a
-// cloth's start would stop every run at its first step. A grid's extreme vertices are its four
-// corners (computed as make_grid does; the transform is affine and the box convex); a mesh's
-// are all its vertices, read once more here. A mesh that cannot be read, or a non-finite
-// vertex, is left for build_model to report with its own message.
-void check_bounds_hold_cloths(const Node& n, const Box& bounds, const std::vector<ClothSpec>& cloths) {
-  for (std::size_t c = 0; c < cloths.size(); ++c) {
-    const ClothSpec& cloth = cloths[c];
-    std::vector<Vec3> extremes;
-    if (cloth.grid) {
-      for (const Scalar u : {0.0, 1.0})
-        for (const Scalar v : {0.0, 1.0})
-          extremes.emplace_back(cloth.grid->size.x() * (u - 0.5), cloth.grid->size.y() * (v - 0.5), 0.0);
-    } else {
-      try {
-        extremes = load_mesh(cloth.mesh_file).vertices;
-      } catch (const MeshFileError&) {
-      }
-    }
-    for (const Vec3& x : extremes) {
-      const Vec3 start = cloth.transform.apply(x);
-      if (!start.allFinite() || bounds.contains(start)) continue;
-      std::ostringstream where;
-      where << "expected a box holding every cloth's initial position; cloth " << c << " has a vertex at (" << start.x()
-            << ", " << start.y() << ", " << start.z() << ") outside it";
-      n.fail(where.str());
-    }
-  }
-}
-
 // Line and column of a byte offset, for JSON syntax errors.
 std::string line_and_column(const std::string& text, std::size_t byte) {
   std::size_t line = 1, column = 1;
@@ -400,10 +368,7 @@ Scene parse_scene(const std::string& text, const std::filesystem::path& file) {
     if (o.has("meshes")) s.output.meshes = o.at("meshes").boolean();
   }
   if (s.output.folder.empty()) s.output.folder = std::filesystem::path("out") / file.stem();
-  if (n.has("bounds")) {
-    s.bounds = read_box(n.at("bounds"));
-    check_bounds_hold_cloths(n.at("bounds"), *s.bounds, s.cloths);
-  }
+  if (n.has("bounds")) s.bounds = read_box(n.at("bounds"));  // build_model checks it holds the cloths
   if (n.has("render")) {
     const Node r = n.at("render");
     if (!r.raw().is_object()) r.fail("expected an object");
