@@ -15,24 +15,10 @@ namespace fs = std::filesystem;
 
 int check(const std::string& folder_name, std::size_t max_pairs) {
   const fs::path folder(folder_name);
-  Model model;
-  try {
-    model = build_model(run_folder_scene(folder));
-  } catch (const SceneError& e) {
-    std::cerr << "drape check: " << e.what() << "\n";
-    return EXIT_BAD_INPUT;
-  }
-  std::vector<std::pair<int, fs::path>> frames;
-  try {
-    frames = run_folder_frames(folder);
-  } catch (const RunFolderError& e) {
-    std::cerr << "drape check: " << e.what() << "\n";
-    return EXIT_BAD_INPUT;
-  }
-  if (frames.empty()) {
-    std::cerr << "drape check: " << folder.string() << ": no frame_*.* meshes\n";
-    return EXIT_BAD_INPUT;
-  }
+  std::optional<RunFolder> run = open_run_folder(folder, "check");
+  if (!run) return EXIT_BAD_INPUT;
+  const Model& model = run->model;
+  const auto& frames = run->frames;
   const TriangleMesh topology = model.cloth_mesh(model.initial_positions);
   int bad_frames = 0;
   for (const auto& [frame, path] : frames) {

@@ -17,30 +17,18 @@ namespace drape::app {
 namespace fs = std::filesystem;
 
 int render_run(const fs::path& folder, const RenderOptions& options) {
-  Model model;
+  std::optional<RunFolder> run = open_run_folder(folder, "render");
+  if (!run) return EXIT_BAD_INPUT;
+  const Model& model = run->model;
+  const auto& frames = run->frames;
   render::RenderSettings settings;
   try {
-    model = build_model(run_folder_scene(folder));
     settings = render::parse_render_settings(model.scene);
-  } catch (const SceneError& e) {
-    std::cerr << "drape render: " << e.what() << "\n";
-    return EXIT_BAD_INPUT;
   } catch (const render::RenderError& e) {
     std::cerr << "drape render: " << e.what() << "\n";
     return EXIT_BAD_INPUT;
   }
   if (options.width > 0) settings.width = options.width, settings.height = options.height;
-  std::vector<std::pair<int, fs::path>> frames;
-  try {
-    frames = run_folder_frames(folder);
-  } catch (const RunFolderError& e) {
-    std::cerr << "drape render: " << e.what() << "\n";
-    return EXIT_BAD_INPUT;
-  }
-  if (frames.empty()) {
-    std::cerr << "drape render: " << folder.string() << ": no frame_*.* meshes to render\n";
-    return EXIT_BAD_INPUT;
-  }
   const fs::path images = folder / "render";
   std::error_code error;
   fs::create_directories(images, error);

@@ -4,6 +4,8 @@
 #include <charconv>
 #include <filesystem>
 #include <fstream>
+#include <iostream>
+#include <optional>
 #include <limits>
 #include <regex>
 #include <sstream>
@@ -68,6 +70,33 @@ inline std::vector<std::pair<int, std::filesystem::path>> run_folder_frames(cons
   }
   std::sort(frames.begin(), frames.end());
   return frames;
+}
+
+/// A run folder opened for reading: its model and its saved frames.
+struct RunFolder {
+  Model model;
+  std::vector<std::pair<int, std::filesystem::path>> frames;
+};
+
+/// Opens a run folder, or prints why it cannot (a bad scene copy, a folder that cannot be
+/// listed, no frames) after "drape <command>: " and returns nullopt: bad input, status 2.
+inline std::optional<RunFolder> open_run_folder(const std::filesystem::path& folder, const std::string& command) {
+  RunFolder run;
+  try {
+    run.model = build_model(run_folder_scene(folder));
+    run.frames = run_folder_frames(folder);
+  } catch (const SceneError& e) {
+    std::cerr << "drape " << command << ": " << e.what() << "\n";
+    return std::nullopt;
+  } catch (const RunFolderError& e) {
+    std::cerr << "drape " << command << ": " << e.what() << "\n";
+    return std::nullopt;
+  }
+  if (run.frames.empty()) {
+    std::cerr << "drape " << command << ": " << folder.string() << ": no frame_*.* meshes\n";
+    return std::nullopt;
+  }
+  return run;
 }
 
 }  // namespace drape::app

@@ -90,10 +90,7 @@ int sweep(const SweepArguments& args) {
                 << "; nothing to compare with (" << (out / "sweep.csv").string() << " holds what it did)\n";
       return EXIT_RUN_STOPPED;
     }
-  } catch (const SceneError& e) {
-    std::cerr << "drape sweep: " << e.what() << "\n";
-    return EXIT_BAD_INPUT;
-  } catch (const std::runtime_error& e) {
+  } catch (const std::runtime_error& e) {  // a scene a setting makes invalid, or an unwritable table
     std::cerr << "drape sweep: " << e.what() << "\n";
     return EXIT_BAD_INPUT;
   }

@@ -47,8 +47,10 @@ struct Frame {
   }
 };
 
-constexpr ccd::Method METHODS[4] = {ccd::Method::Cubic, ccd::Method::Dnf, ccd::Method::Vincent, ccd::Method::Conservative};
+// Indices into ccd::ALL_METHODS (cubic, dnf, vincent, conservative).
 enum { CUBIC, DNF, VINCENT, CONSERVATIVE };
+static_assert(ccd::ALL_METHODS[CUBIC] == ccd::Method::Cubic && ccd::ALL_METHODS[DNF] == ccd::Method::Dnf &&
+              ccd::ALL_METHODS[VINCENT] == ccd::Method::Vincent && ccd::ALL_METHODS[CONSERVATIVE] == ccd::Method::Conservative);
 
 struct MethodRun {
   double ms = 0;  // median over the passes of the whole frame's narrow phase
@@ -232,7 +234,7 @@ int main(int argc, char** argv) {
     if (check) penetrations += found = int(find_penetrations(model, state.positions, state.time).size());
     if (f % every != 0) continue;
     MethodRun runs[4];
-    for (int m = 0; m < 4; ++m) runs[m] = time_method(current, METHODS[m], passes);
+    for (int m = 0; m < 4; ++m) runs[m] = time_method(current, ccd::ALL_METHODS[m], passes);
     // Disagreements: cubic or dnf against vincent (the filter must not change a hit), and
     // hits of vincent the conservative method does not report (it answers exact contact; the
     // root-finding methods accept a distance of contact_tolerance times the extent at a root).
