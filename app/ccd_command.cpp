@@ -50,19 +50,20 @@ std::vector<fs::path> expand_inputs(const std::vector<std::string>& inputs) {
 }
 
 void print_table(const std::vector<ccd::EvaluationRow>& rows, int passes) {
-  std::printf("%-13s %-12s %8s %9s %8s %8s %8s %8s %11s\n", "method", "kind", "queries", "positives", "true_pos",
-              "false_neg", "false_pos", "culled", "ns/query");
+  std::printf("%-13s %-12s %8s %9s %8s %8s %8s %8s %9s %11s\n", "method", "kind", "queries", "positives", "true_pos",
+              "false_neg", "false_pos", "culled", "separated", "ns/query");
   for (const auto& r : rows) {
-    std::printf("%-13s %-12s %8llu %9llu %8llu %8llu %8llu %8llu %11.1f\n",
+    std::printf("%-13s %-12s %8llu %9llu %8llu %8llu %8llu %8llu %9llu %11.1f\n",
                 std::string(ccd::method_name(r.method)).c_str(), r.kind.c_str(),
                 static_cast<unsigned long long>(r.queries), static_cast<unsigned long long>(r.positives),
                 static_cast<unsigned long long>(r.true_positives), static_cast<unsigned long long>(r.false_negatives),
                 static_cast<unsigned long long>(r.false_positives), static_cast<unsigned long long>(r.culled),
-                r.ns_per_query);
+                static_cast<unsigned long long>(r.separated), r.ns_per_query);
   }
   std::printf(
       "\nfalse_neg: contacts missed; false_pos: contacts reported that are not there; culled: decided by the\n"
-      "filter with no root finding; ns/query: median over %d timed passes on one thread.\n",
+      "filter with no root finding; separated: of those, by the separation stage (the cubic has roots, the\n"
+      "features are apart around them); ns/query: median over %d timed passes on one thread.\n",
       passes);
 }
 

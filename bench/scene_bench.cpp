@@ -72,8 +72,10 @@ MethodRun time_method(const Frame& frame, ccd::Method method, int passes) {
       total += std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - begin).count();
       if (p == 0) {
         run.counters += out.counters;
-        for (const auto& r : out.vertex_face) run.hits.push_back(r.hit);
-        for (const auto& r : out.edge_edge) run.hits.push_back(r.hit);
+        const std::size_t base = run.hits.size();
+        run.hits.resize(base + b.vertex_face.size() + b.edge_edge.size(), false);
+        for (const auto& hit : out.vertex_face) run.hits[base + hit.index] = true;
+        for (const auto& hit : out.edge_edge) run.hits[base + b.vertex_face.size() + hit.index] = true;
       }
     }
     ms.push_back(total);

@@ -21,7 +21,8 @@ constexpr std::size_t GRAIN = 256;
 
 void BatchCounters::add(const Result& result) {
   ++tests;
-  culled += result.path == Path::Culled;
+  culled += result.path == Path::Culled || result.path == Path::Separated;
+  separated += result.path == Path::Separated;
   degenerate += result.path == Path::Degenerate;
   root_solves += result.root_solves;
   hits += result.hit;
@@ -30,6 +31,7 @@ void BatchCounters::add(const Result& result) {
 BatchCounters& BatchCounters::operator+=(const BatchCounters& other) {
   tests += other.tests;
   culled += other.culled;
+  separated += other.separated;
   root_solves += other.root_solves;
   hits += other.hits;
   degenerate += other.degenerate;
@@ -118,13 +120,14 @@ __attribute__((target_clones("avx2", "default"))) void compute_cubics(ChunkCubic
 
 // The tests [begin, end) of one kind: cubics a chunk at a time; dnf and vincent decide the
 // culled ones from the cubic alone, everything else runs the full method on the gathered query.
-// out must hold Result{} in [begin, end) already (a culled test leaves its slot as it is).
-// Returns the counters of the range.
-template <class Pair>
-BatchCounters run_range(const BatchInput& input, std::span<const Pair> pairs, QueryKind kind, const Options& options,
-                        std::size_t begin, std::size_t end, Result* out) {
+// Appends the hits to hits and returns the counters of the range.
+template <QueryKind kind, class Pair>
+BatchCounters run_range(const BatchInput& input, std::span<const Pair> pairs, const Options& options, std::size_t begin,
+                        std::size_t end, std::vector<BatchHit>& hits) {
   BatchCounters counters;
-  const auto order = coplanarity_order(kind);
+  constexpr std::array<int, 4> order = kind == QueryKind::VertexFace ? std::array<int, 4>{1, 2, 3, 0}
+                                                                     : std::array<int, 4>{0, 1, 2, 3};
+  static_assert(kind != QueryKind::VertexFace || order[3] == 0, "coplanarity_order");
   const bool filter = options.method == Method::Dnf || options.method == Method::Vincent;
   // The conservative method ends a test at its first question when, at zero thickness, the
   // cubic is certainly nonzero on the whole step: the result it returns then is written here.
@@ -154,8 +157,7 @@ BatchCounters run_range(const BatchInput& input, std::span<const Pair> pairs, Qu
         ++counters.culled;
         continue;
       }
-      if (conservative_first && c.certainly_apart[i]) {
-        out[first + i].root_solves = 1;  // the one interval it examined
+      if (conservative_first && c.certainly_apart[i]) {  // a miss, one interval examined
         ++counters.tests;
         ++counters.culled;
         ++counters.root_solves;
@@ -166,8 +168,9 @@ BatchCounters run_range(const BatchInput& input, std::span<const Pair> pairs, Qu
       cubic.error = c.error[i];
       cubic.extent = c.extent[i];
       assert(bool(c.culled[i]) == filter_culls(cubic));
-      out[first + i] = elementary_ccd(kind, gather(input, pairs[first + i]), options, cubic);
-      counters.add(out[first + i]);
+      const Result result = elementary_ccd(kind, gather(input, pairs[first + i]), options, cubic);
+      counters.add(result);
+      if (result.hit) hits.push_back({first + i, result});
     }
   }
   return counters;
@@ -177,30 +180,41 @@ BatchCounters run_range(const BatchInput& input, std::span<const Pair> pairs, Qu
 
 BatchOutput run_batch(const BatchInput& input, const Options& options, int threads) {
   assert(input.start.size() == input.end.size());
+  assert(coplanarity_order(QueryKind::VertexFace) == (std::array<int, 4>{1, 2, 3, 0}));
+  assert(coplanarity_order(QueryKind::EdgeEdge) == (std::array<int, 4>{0, 1, 2, 3}));
   BatchOutput out;
-  out.vertex_face.resize(input.vertex_face.size());  // every slot Result{}: what a culled test leaves
-  out.edge_edge.resize(input.edge_edge.size());
-  const auto vertex_face = [&](std::size_t begin, std::size_t end) {
-    return run_range(input, input.vertex_face, QueryKind::VertexFace, options, begin, end, out.vertex_face.data());
-  };
-  const auto edge_edge = [&](std::size_t begin, std::size_t end) {
-    return run_range(input, input.edge_edge, QueryKind::EdgeEdge, options, begin, end, out.edge_edge.data());
-  };
+  const std::size_t vf = input.vertex_face.size(), ee = input.edge_edge.size();
   if (threads <= 1) {
-    out.counters += vertex_face(0, out.vertex_face.size());
-    out.counters += edge_edge(0, out.edge_edge.size());
-  } else {
-    // Counters are integer sums: the same whatever the split and the order of the ranges.
-    tbb::combinable<BatchCounters> partial;
-    tbb::task_arena arena(threads);
-    arena.execute([&] {
-      tbb::parallel_for(tbb::blocked_range<std::size_t>(0, out.vertex_face.size(), GRAIN),
-                        [&](const auto& r) { partial.local() += vertex_face(r.begin(), r.end()); });
-      tbb::parallel_for(tbb::blocked_range<std::size_t>(0, out.edge_edge.size(), GRAIN),
-                        [&](const auto& r) { partial.local() += edge_edge(r.begin(), r.end()); });
-    });
-    partial.combine_each([&](const BatchCounters& c) { out.counters += c; });
+    out.counters += run_range<QueryKind::VertexFace>(input, input.vertex_face, options, 0, vf, out.vertex_face);
+    out.counters += run_range<QueryKind::EdgeEdge>(input, input.edge_edge, options, 0, ee, out.edge_edge);
+    return out;
   }
+  // Counters are integer sums and the hits are sorted afterwards: the same whatever the split
+  // and the order in which the ranges finish.
+  struct Partial {
+    BatchCounters counters;
+    std::vector<BatchHit> vertex_face, edge_edge;
+  };
+  tbb::combinable<Partial> partial;
+  tbb::task_arena arena(threads);
+  arena.execute([&] {
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, vf, GRAIN), [&](const auto& r) {
+      Partial& p = partial.local();
+      p.counters += run_range<QueryKind::VertexFace>(input, input.vertex_face, options, r.begin(), r.end(), p.vertex_face);
+    });
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, ee, GRAIN), [&](const auto& r) {
+      Partial& p = partial.local();
+      p.counters += run_range<QueryKind::EdgeEdge>(input, input.edge_edge, options, r.begin(), r.end(), p.edge_edge);
+    });
+  });
+  partial.combine_each([&](const Partial& p) {
+    out.counters += p.counters;
+    out.vertex_face.insert(out.vertex_face.end(), p.vertex_face.begin(), p.vertex_face.end());
+    out.edge_edge.insert(out.edge_edge.end(), p.edge_edge.begin(), p.edge_edge.end());
+  });
+  const auto by_index = [](const BatchHit& a, const BatchHit& b) { return a.index < b.index; };
+  std::sort(out.vertex_face.begin(), out.vertex_face.end(), by_index);
+  std::sort(out.edge_edge.begin(), out.edge_edge.end(), by_index);
   return out;
 }
 

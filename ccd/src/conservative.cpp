@@ -250,6 +250,15 @@ Result conservative_search(const Problem& p, bool use_cubic) {
   // Only the conservative method itself escalates to long double; the degenerate path of the
   // other methods (use_cubic = false) stays in double.
   const bool exact_contact = p.options.thickness == 0 && use_cubic;
+  // The filter's separation stage: an exact contact is an exact root of the cubic, which
+  // roots_apart keeps in its sub-intervals (its margin is twice the coefficients' error), and
+  // there the features are apart by more than the rounding of the positions.
+  if (exact_contact && !cubic_poorly_resolved(p.cubic) && !certainly_nonzero(p.cubic.b, p.cubic.error) &&
+      roots_apart(p.kind, p.query, p.cubic, 0.0, p.options.separation_depth)) {
+    Result apart;
+    apart.path = Path::Separated;
+    return apart;
+  }
   Outcome<Scalar> out;
   if (exact_contact && cubic_poorly_resolved(p.cubic)) {
     // Coplanar, or nearly, to double precision: the whole step is searched in long double,

@@ -34,6 +34,8 @@ using detail::Problem;
 
 // The inside test of the root-finding methods at a candidate time: the closest points of the
 // features there (the standard formulas) and their distance against the tolerance.
+Scalar contact_distance(const Problem& p) { return p.options.thickness + p.options.contact_tolerance * p.cubic.extent; }
+
 bool touching_at(const Problem& p, Scalar t, Result& result) {
   const auto x = detail::positions_at<Scalar>(p.query, t);
   Scalar distance_squared = 0;
@@ -47,7 +49,7 @@ bool touching_at(const Problem& p, Scalar t, Result& result) {
     distance_squared = c.distance_squared;
     params = Vec2(c.s, c.u);
   }
-  const Scalar tolerance = p.options.thickness + p.options.contact_tolerance * p.cubic.extent;
+  const Scalar tolerance = contact_distance(p);
   if (!(distance_squared <= tolerance * tolerance)) return false;
   result.hit = true;
   result.toc = t;
@@ -109,6 +111,13 @@ Result vincent_method(const Problem& p) {
   }
   const int variations = sign_variations(b);
   if (variations == 0 && !root_possible_at_end(p)) return result;  // culled
+  // The separation stage: where the roots are, the features are apart. Both ends must be clear
+  // of a root (a contact right at t = 0 or t = 1 is the inside test's to decide).
+  if (!root_possible_at_start(p) && !root_possible_at_end(p) &&
+      detail::roots_apart(p.kind, p.query, p.cubic, contact_distance(p), p.options.separation_depth)) {
+    result.path = Path::Separated;
+    return result;
+  }
   result.path = Path::Solved;
   if (variations == 1) {
     // The common case after the cull: one root, bracketed by the ends of the step.

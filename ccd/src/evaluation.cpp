@@ -53,7 +53,8 @@ std::vector<EvaluationRow> evaluate_methods(const std::vector<QueryFile>& files,
         row.true_positives += r.hit && set.truth[i];
         row.false_negatives += !r.hit && set.truth[i];
         row.false_positives += r.hit && !set.truth[i];
-        row.culled += r.path == Path::Culled;
+        row.culled += r.path == Path::Culled || r.path == Path::Separated;
+        row.separated += r.path == Path::Separated;
       }
       time_pass(set, options, sink);  // warm-up: caches and clock frequency
       std::vector<double> seconds;
@@ -68,6 +69,7 @@ std::vector<EvaluationRow> evaluate_methods(const std::vector<QueryFile>& files,
       all.false_negatives += row.false_negatives;
       all.false_positives += row.false_positives;
       all.culled += row.culled;
+      all.separated += row.separated;
       rows.push_back(row);
     }
     all.ns_per_query = all.queries ? 1e9 * median(all_seconds) / static_cast<double>(all.queries) : 0.0;

@@ -52,6 +52,24 @@ inline Scalar max_abs_coordinate(const Query& q) {
   return m;
 }
 
+/// Whether the features stay more than gap apart at every time in [lo, hi] (widened by 2^-30 of
+/// the step on each side), shown by a separating axis: the coordinate axes, and axes from the
+/// features' shape at the interval's midpoint (the triangle's edge normals in its plane; the
+/// edges' normals in the plane of both, and their directions). A linearly moving point's
+/// projection on a fixed axis is linear in t, so its range over [lo, hi] is spanned by its
+/// projections at lo and hi. Rounding is covered by a margin of 64 u times the largest
+/// coordinate. separation.cpp.
+bool apart_over(QueryKind kind, const Query& q, Scalar lo, Scalar hi, Scalar gap);
+
+/// The filter's separation stage: the step is halved down to depth levels (de Casteljau); a
+/// sub-interval is dropped when the cubic certainly has no root on it (its coefficients exceed
+/// twice their error bound and the rounding of any root finder's evaluation, in one sign) or
+/// when the features are apart on it (apart_over). True when every sub-interval is dropped:
+/// at every root of the cubic in the step, computed or exact, the features are more than gap
+/// apart. depth 0 (or less) returns false. The whole step itself is never tested for
+/// separation (the broad phase's boxes overlap there).
+bool roots_apart(QueryKind kind, const Query& q, const CoplanarityCubic& cubic, Scalar gap, int depth);
+
 /// The conservative method, and the degenerate path of the others (use_cubic = false: the
 /// cubic says nothing, decide by distance alone).
 Result conservative_search(const Problem& p, bool use_cubic);

@@ -211,16 +211,14 @@ struct CollisionPipeline::Impl {
     counters.vf_tests += long(c.vertex_face.size());
     counters.ee_tests += long(c.edge_edge.size());
     std::vector<std::pair<Contact, Scalar>> hits;
-    for (std::size_t i = 0; i < c.vertex_face.size(); ++i) {
-      if (!out.vertex_face[i].hit) continue;
-      const auto& p = c.vertex_face[i];
-      const Scalar toc = canonical_toc(ccd::QueryKind::VertexFace, ccd::gather(input, p), out.vertex_face[i].toc);
+    for (const ccd::BatchHit& hit : out.vertex_face) {
+      const auto& p = c.vertex_face[hit.index];
+      const Scalar toc = canonical_toc(ccd::QueryKind::VertexFace, ccd::gather(input, p), hit.result.toc);
       hits.emplace_back(contact(true, {p.vertex, p.face[0], p.face[1], p.face[2]}, toc), toc);
     }
-    for (std::size_t i = 0; i < c.edge_edge.size(); ++i) {
-      if (!out.edge_edge[i].hit) continue;
-      const auto& p = c.edge_edge[i];
-      const Scalar toc = canonical_toc(ccd::QueryKind::EdgeEdge, ccd::gather(input, p), out.edge_edge[i].toc);
+    for (const ccd::BatchHit& hit : out.edge_edge) {
+      const auto& p = c.edge_edge[hit.index];
+      const Scalar toc = canonical_toc(ccd::QueryKind::EdgeEdge, ccd::gather(input, p), hit.result.toc);
       hits.emplace_back(contact(false, {p.edge_a[0], p.edge_a[1], p.edge_b[0], p.edge_b[1]}, toc), toc);
     }
     counters.ccd_hits += long(hits.size());

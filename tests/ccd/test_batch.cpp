@@ -21,30 +21,32 @@ TEST(Batch, MatchesElementaryCallsAndCounts) {
     options.method = method;
     options.thickness = thickness;
     const BatchOutput out = run_batch(input, options);
-    ASSERT_EQ(out.vertex_face.size(), vf.size());
-    ASSERT_EQ(out.edge_edge.size(), ee.size());
     BatchCounters expected;
-    for (std::size_t i = 0; i < vf.size(); ++i) {
-      const Result r = vertex_face_ccd(gather(input, vf[i]), options);
-      EXPECT_EQ(r.hit, out.vertex_face[i].hit);
-      EXPECT_EQ(r.toc, out.vertex_face[i].toc);  // bit for bit: the batch computes the same cubics
-      EXPECT_EQ(r.params, out.vertex_face[i].params);
-      EXPECT_EQ(r.path, out.vertex_face[i].path);
-      EXPECT_EQ(r.root_solves, out.vertex_face[i].root_solves);
-      expected.add(r);
-    }
-    for (std::size_t i = 0; i < ee.size(); ++i) {
-      const Result r = edge_edge_ccd(gather(input, ee[i]), options);
-      EXPECT_EQ(r.hit, out.edge_edge[i].hit);
-      EXPECT_EQ(r.toc, out.edge_edge[i].toc);
-      EXPECT_EQ(r.params, out.edge_edge[i].params);
-      EXPECT_EQ(r.path, out.edge_edge[i].path);
-      EXPECT_EQ(r.root_solves, out.edge_edge[i].root_solves);
-      expected.add(r);
-    }
+    // Every hit of the one-query calls, in order, with the same fields bit for bit (the batch
+    // computes the same cubics); nothing else.
+    const auto compare = [&](const std::vector<BatchHit>& hits, std::size_t count, auto one_query) {
+      std::size_t next = 0;
+      for (std::size_t i = 0; i < count; ++i) {
+        const Result r = one_query(i);
+        expected.add(r);
+        if (!r.hit) continue;
+        ASSERT_LT(next, hits.size()) << "hit " << i << " missing";
+        EXPECT_EQ(hits[next].index, i);
+        EXPECT_EQ(hits[next].result.toc, r.toc);
+        EXPECT_EQ(hits[next].result.params, r.params);
+        EXPECT_EQ(hits[next].result.path, r.path);
+        EXPECT_EQ(hits[next].result.root_solves, r.root_solves);
+        ++next;
+      }
+      EXPECT_EQ(next, hits.size());
+      for (const BatchHit& h : hits) EXPECT_TRUE(h.result.hit);
+    };
+    compare(out.vertex_face, vf.size(), [&](std::size_t i) { return vertex_face_ccd(gather(input, vf[i]), options); });
+    compare(out.edge_edge, ee.size(), [&](std::size_t i) { return edge_edge_ccd(gather(input, ee[i]), options); });
     EXPECT_EQ(out.counters.tests, vf.size() + ee.size());
     EXPECT_EQ(out.counters.tests, expected.tests);
     EXPECT_EQ(out.counters.culled, expected.culled);
+    EXPECT_EQ(out.counters.separated, expected.separated);
     EXPECT_EQ(out.counters.hits, expected.hits);
     EXPECT_EQ(out.counters.root_solves, expected.root_solves);
     EXPECT_EQ(out.counters.degenerate, expected.degenerate);
@@ -56,8 +58,17 @@ TEST(Batch, MatchesElementaryCallsAndCounts) {
     }
     // Two threads split the tests into other chunks: the same results.
     const BatchOutput two = run_batch(input, options, 2);
-    for (std::size_t i = 0; i < vf.size(); ++i) EXPECT_EQ(two.vertex_face[i].toc, out.vertex_face[i].toc);
-    for (std::size_t i = 0; i < ee.size(); ++i) EXPECT_EQ(two.edge_edge[i].toc, out.edge_edge[i].toc);
+    ASSERT_EQ(two.vertex_face.size(), out.vertex_face.size());
+    ASSERT_EQ(two.edge_edge.size(), out.edge_edge.size());
+    for (std::size_t i = 0; i < out.vertex_face.size(); ++i) {
+      EXPECT_EQ(two.vertex_face[i].index, out.vertex_face[i].index);
+      EXPECT_EQ(two.vertex_face[i].result.toc, out.vertex_face[i].result.toc);
+    }
+    for (std::size_t i = 0; i < out.edge_edge.size(); ++i) {
+      EXPECT_EQ(two.edge_edge[i].index, out.edge_edge[i].index);
+      EXPECT_EQ(two.edge_edge[i].result.toc, out.edge_edge[i].result.toc);
+    }
     EXPECT_EQ(two.counters.culled, out.counters.culled);
+    EXPECT_EQ(two.counters.hits, out.counters.hits);
   }
 }

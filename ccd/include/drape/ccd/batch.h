@@ -24,7 +24,8 @@ struct EdgeEdgePair {
 /// What a batch did; summed into the frame statistics.
 struct BatchCounters {
   std::uint64_t tests = 0;        ///< elementary tests run
-  std::uint64_t culled = 0;       ///< decided by the filter alone (Path::Culled)
+  std::uint64_t culled = 0;       ///< decided by the filter alone, no root finding (Path::Culled or Separated)
+  std::uint64_t separated = 0;    ///< of those, by the separation stage (Path::Separated)
   std::uint64_t root_solves = 0;  ///< root-finding calls (Result::root_solves summed)
   std::uint64_t hits = 0;         ///< tests reporting a contact
   std::uint64_t degenerate = 0;   ///< tests decided on a degenerate path
@@ -40,15 +41,23 @@ struct BatchInput {
   std::span<const EdgeEdgePair> edge_edge;
 };
 
+/// A test that reports a contact: its index in the input's pairs and its result.
+struct BatchHit {
+  std::size_t index = 0;
+  Result result;
+};
+
+/// Only the hits are kept: a frame runs millions of tests and reports contacts for about one
+/// in a hundred; a result per test would cost more memory traffic than a culled test itself.
 struct BatchOutput {
-  std::vector<Result> vertex_face;  ///< one per input pair, same order
-  std::vector<Result> edge_edge;
+  std::vector<BatchHit> vertex_face;  ///< the vertex-face hits, in increasing index
+  std::vector<BatchHit> edge_edge;    ///< the edge-edge hits, in increasing index
   BatchCounters counters;
 };
 
-/// Runs every test of the batch with options.method, on up to threads threads (TBB). Each
-/// result lands at its pair's index and the counters are summed per range of tests (integer
-/// sums), so the output does not depend on the thread count. Indices must lie in [0, start.size()).
+/// Runs every test of the batch with options.method, on up to threads threads (TBB). The hits
+/// are sorted by index and the counters are summed per range of tests (integer sums), so the
+/// output does not depend on the thread count. Indices must lie in [0, start.size()).
 BatchOutput run_batch(const BatchInput& input, const Options& options, int threads = 1);
 
 /// The query of one pair, gathered from the vertex arrays.

@@ -18,7 +18,8 @@ struct EvaluationRow {
   std::uint64_t true_positives = 0;
   std::uint64_t false_negatives = 0;  ///< contacts the method missed
   std::uint64_t false_positives = 0;  ///< contacts the method reported that are not there
-  std::uint64_t culled = 0;           ///< decided by the filter alone
+  std::uint64_t culled = 0;           ///< decided by the filter alone (signs or separation)
+  std::uint64_t separated = 0;        ///< of those, by the separation stage
   double ns_per_query = 0.0;          ///< median over the timed passes
 };
 

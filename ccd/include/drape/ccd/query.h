@@ -66,6 +66,15 @@ struct Options {
   /// (a double root, a tangential contact) is tested at its midpoint. 2^-30 of the step.
   int max_subdivision_depth = 30;
 
+  /// Vincent and conservative (at zero thickness): levels of the separation stage. When the
+  /// cubic has roots in the step, it is halved this many times (de Casteljau) and each
+  /// sub-interval that may hold a root is tested for a separating axis between the features;
+  /// when every one is separated the test ends there (Path::Separated), with the answer the
+  /// root finding would give (no contact) and without it. 0 turns the stage off: the paper's
+  /// filter alone. Costs at most this many axis tests a level on a test that goes on to root
+  /// finding; decides nothing differently.
+  int separation_depth = 3;
+
   /// Conservative: an interval narrower than this (units of the step) that neither the cubic
   /// nor the distance bound excludes is reported as a contact at its start. It bounds both the
   /// error of the reported time of contact and how near a near-miss must come to be reported.
@@ -79,6 +88,8 @@ struct Options {
 /// How a result was decided; counted in the batch statistics.
 enum class Path : std::uint8_t {
   Culled,      ///< the filter proved the cubic has no root in [0, 1]; no root finding
+  Separated,   ///< the cubic has roots in [0, 1], but over short intervals around them the features
+               ///< are apart along a separating axis: no contact, no root finding
   Solved,      ///< roots were isolated or solved for, and the inside test decided
   Degenerate,  ///< decided on a degenerate path: cubic identically zero (coplanar motion),
                ///< tangential root at the subdivision bound, or the interval budget ran out

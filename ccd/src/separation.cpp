@@ -1,0 +1,137 @@
+// The separation stage of the filter: where the coplanarity cubic does have roots in the step,
+// de Casteljau halving locates them in short sub-intervals, and a separating axis over each
+// shows the features apart there. ccd.md, "The separation stage".
+#include "problem.h"
+
+namespace drape::ccd::detail {
+
+namespace {
+
+// Rounding of a projected extent, in units of u times the largest coordinate times the axis's
+// 1-norm: the position at a time (about 4 roundings of values up to twice the coordinate
+// bound), the dot product (3 more), the subtraction of two projections, and the rounding of
+// the distance the root-finding methods compute at a root (DISTANCE_ERROR_FACTOR of the
+// conservative search, 32). 64 covers them with a factor of two to spare.
+constexpr Scalar PROJECTION_ERROR_FACTOR = 64.0;
+
+// Each sub-interval's time range is widened by this much on both sides before the axis test:
+// the root-finding methods report a root within their tolerance (1e-13 of the step) of where
+// their computed cubic changes sign, which may lie just across a sub-interval's end.
+constexpr Scalar TIME_WIDENING = 0x1p-30;
+
+
+// Whether points [0, split) and [split, 4), as given at two times, project on w to ranges
+// farther apart than need times w's 1-norm.
+bool apart_along(const Vec3 (&x)[4][2], int split, const Vec3& w, Scalar need) {
+  Scalar a_lo = std::numeric_limits<Scalar>::infinity(), a_hi = -a_lo, b_lo = a_lo, b_hi = -a_lo;
+  for (int i = 0; i < 4; ++i) {
+    const Scalar p0 = w.dot(x[i][0]), p1 = w.dot(x[i][1]);
+    const Scalar lo = std::min(p0, p1), hi = std::max(p0, p1);
+    if (i < split) {
+      a_lo = std::min(a_lo, lo);
+      a_hi = std::max(a_hi, hi);
+    } else {
+      b_lo = std::min(b_lo, lo);
+      b_hi = std::max(b_hi, hi);
+    }
+  }
+  const Scalar scaled = need * (std::abs(w[0]) + std::abs(w[1]) + std::abs(w[2]));
+  // False for a zero or non-finite axis: NaN compares false, and a zero axis gives 0 > 0.
+  return (b_lo - a_hi > scaled) || (a_lo - b_hi > scaled);
+}
+
+// certainly_nonzero without branches: the signs are random here, and mispredicted branches
+// cost more than the comparisons.
+bool beyond(const Bernstein3& b, Scalar margin) {
+  const Scalar lo = std::min(std::min(b[0], b[1]), std::min(b[2], b[3]));
+  const Scalar hi = std::max(std::max(b[0], b[1]), std::max(b[2], b[3]));
+  return (lo > margin) | (hi < -margin);
+}
+
+}  // namespace
+
+bool apart_over(QueryKind kind, const Query& q, Scalar lo, Scalar hi, Scalar gap) {
+  lo = std::max(Scalar(0), lo - TIME_WIDENING);
+  hi = std::min(Scalar(1), hi + TIME_WIDENING);
+  const int split = kind == QueryKind::VertexFace ? 1 : 2;  // the vertex, or edge_a, against the rest
+  Vec3 x[4][2];
+  Scalar largest = 0;
+  for (int i = 0; i < 4; ++i) {
+    const Vec3 motion = q.end[i] - q.start[i];
+    x[i][0] = q.start[i] + lo * motion;
+    x[i][1] = q.start[i] + hi * motion;
+    largest = std::max(largest, std::max(q.start[i].cwiseAbs().maxCoeff(), q.end[i].cwiseAbs().maxCoeff()));
+  }
+  const Scalar need = gap + PROJECTION_ERROR_FACTOR * UNIT_ROUNDOFF * largest;
+  // The coordinate axes first: the cheapest, and enough for most far crossings.
+  for (int k = 0; k < 3; ++k) {
+    Scalar a_lo = std::numeric_limits<Scalar>::infinity(), a_hi = -a_lo, b_lo = a_lo, b_hi = -a_lo;
+    for (int i = 0; i < 4; ++i) {
+      const Scalar l = std::min(x[i][0][k], x[i][1][k]), h = std::max(x[i][0][k], x[i][1][k]);
+      if (i < split) {
+        a_lo = std::min(a_lo, l);
+        a_hi = std::max(a_hi, h);
+      } else {
+        b_lo = std::min(b_lo, l);
+        b_hi = std::max(b_hi, h);
+      }
+    }
+    if ((b_lo - a_hi > need) || (a_lo - b_hi > need)) return true;
+  }
+  // An axis from the features' shape at the interval's midpoint (any fixed axis is valid;
+  // these separate the features where they are coplanar, which is where the cubic's roots are).
+  Vec3 m[4];
+  for (int i = 0; i < 4; ++i) m[i] = 0.5 * (x[i][0] + x[i][1]);
+  if (kind == QueryKind::VertexFace) {
+    // The in-plane normal of the triangle edge the vertex lies farthest outside of: the
+    // normals n x e point inwards, so that edge has the lowest (v - f) . (n x e) / |n x e|_1.
+    const Vec3 e[3] = {m[2] - m[1], m[3] - m[2], m[1] - m[3]};
+    const Vec3 n = e[0].cross(-e[2]);
+    int best = 0;
+    Scalar best_value = std::numeric_limits<Scalar>::infinity();
+    Vec3 axis[3];
+    for (int i = 0; i < 3; ++i) {
+      axis[i] = n.cross(e[i]);
+      const Scalar norm = axis[i].lpNorm<1>();
+      const Scalar value = (m[0] - m[1 + i]).dot(axis[i]) / norm;
+      if (value < best_value) {
+        best_value = value;
+        best = i;
+      }
+    }
+    return apart_along(x, split, axis[best], need);
+  }
+  // Coplanar edges whose lines cross outside one of them are separated by the other's line:
+  // the in-plane normals of the two edges (parallel edges are left to the coordinate axes).
+  const Vec3 a = m[1] - m[0], b = m[3] - m[2];
+  const Vec3 n = a.cross(b);
+  return apart_along(x, split, n.cross(b), need) || apart_along(x, split, n.cross(a), need);
+}
+
+bool roots_apart(QueryKind kind, const Query& q, const CoplanarityCubic& cubic, Scalar gap, int depth) {
+  if (depth <= 0) return false;
+  // A sub-interval holds no root of the exact or the computed cubic, and no sign change of a
+  // root finder's evaluation of it, when its coefficients exceed this in one sign: twice the
+  // coefficients' error, and the rounding of the halving and of an evaluation in the power
+  // basis (Horner). So every root any method could find lies in the interval kept below.
+  const Scalar margin = 2 * cubic.error + 256 * UNIT_ROUNDOFF * max_abs(cubic.b);
+  // Halve towards the roots while all of them lie on one side (a chain, not a tree: cheap and
+  // with few branches); then one axis test over what is left.
+  Scalar lo = 0, hi = 1;
+  Bernstein3 b = cubic.b;
+  for (int level = 0; level < depth; ++level) {
+    Bernstein3 left, right;
+    split_half(b, left, right);
+    const bool drop_left = beyond(left, margin), drop_right = beyond(right, margin);
+    if (drop_left & drop_right) return true;  // no root at all (the signs varied, the cubic does not vanish)
+    if (!drop_left & !drop_right) break;      // roots on both sides: test the whole interval
+    const Scalar mid = 0.5 * (lo + hi);
+    lo = drop_left ? mid : lo;
+    hi = drop_left ? hi : mid;
+    b = drop_left ? right : left;
+  }
+  if (lo == 0 && hi == 1) return false;  // the broad phase tested the whole step already
+  return apart_over(kind, q, lo, hi, gap);
+}
+
+}  // namespace drape::ccd::detail

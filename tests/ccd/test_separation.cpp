@@ -1,0 +1,148 @@
+// The filter's separation stage (ccd/src/separation.cpp): the axis test never claims a gap that
+// is not there, and the stage changes no answer of vincent, only how it is reached.
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <random>
+
+#include "drape/ccd/query_file.h"
+#include "drape/ccd/query_generator.h"
+#include "problem.h"
+
+using namespace drape;
+using namespace drape::ccd;
+
+namespace {
+
+// The exact distance between the features at time t is at most the long double estimate plus
+// its error bound.
+long double distance_upper_bound(QueryKind kind, const Query& q, long double t) {
+  const auto p = detail::proximity_at<long double>(kind, q, t);
+  return p.distance + p.error;
+}
+
+}  // namespace
+
+TEST(Separation, AnAxisGapHoldsAtEveryTimeOfTheInterval) {
+  std::mt19937_64 rng(7);
+  std::uniform_real_distribution<Scalar> unit(0, 1);
+  std::size_t apart = 0, near = 0;
+  for (QueryKind kind : {QueryKind::VertexFace, QueryKind::EdgeEdge}) {
+    for (QueryFamily family : {QueryFamily::Random, QueryFamily::Contact, QueryFamily::ParallelEdges}) {
+      const auto queries = generate_queries(family, kind, 20'000, 11 + int(family));
+      for (std::size_t i = 0; i < queries.size(); ++i) {
+        Scalar lo = unit(rng), hi = unit(rng);
+        if (lo > hi) std::swap(lo, hi);
+        const Scalar gap = 0.05 * unit(rng);
+        if (!detail::apart_over(kind, queries[i], lo, hi, gap)) {
+          ++near;
+          continue;
+        }
+        ++apart;
+        for (int k = 0; k <= 16; ++k) {
+          const long double t = lo + (hi - lo) * k / 16.0L;
+          ASSERT_GT(distance_upper_bound(kind, queries[i], t), gap)
+              << kind_name(kind) << " " << family_name(family) << " #" << i << " t=" << double(t);
+        }
+      }
+    }
+  }
+  // Both answers occur: the check above is not vacuous.
+  EXPECT_GT(apart, 10'000u);
+  EXPECT_GT(near, 10'000u);
+}
+
+TEST(Separation, ATouchingIntervalIsNeverSeparated) {
+  // Built contacts: at their contact time the features touch, so no interval around it is apart.
+  std::size_t checked = 0;
+  for (QueryKind kind : {QueryKind::VertexFace, QueryKind::EdgeEdge}) {
+    const auto queries = generate_queries(QueryFamily::Contact, kind, 20'000, 99);
+    Options conservative;
+    conservative.method = Method::Conservative;
+    for (const Query& q : queries) {
+      const Result r = elementary_ccd(kind, q, conservative);
+      if (!r.hit) continue;
+      ++checked;
+      EXPECT_FALSE(detail::apart_over(kind, q, std::max(0.0, r.toc - 1e-3), std::min(1.0, r.toc + 1e-3), 0.0));
+    }
+  }
+  EXPECT_GT(checked, 10'000u);
+}
+
+namespace {
+
+struct StageTally {
+  std::size_t queries = 0, separated = 0, differences = 0;
+};
+
+// Vincent with the stage and without it: the same hit, time and parameters; and cubic never
+// finds a contact in a test the stage separated.
+void compare_vincent(QueryKind kind, const Query& q, Scalar thickness, StageTally& tally, const std::string& where) {
+  Options with, without, cubic;
+  with.method = without.method = Method::Vincent;
+  cubic.method = Method::Cubic;
+  with.thickness = without.thickness = cubic.thickness = thickness;
+  without.separation_depth = 0;
+  const Result a = elementary_ccd(kind, q, with), b = elementary_ccd(kind, q, without);
+  ++tally.queries;
+  tally.separated += a.path == Path::Separated;
+  const bool same = a.hit == b.hit && (!a.hit || (a.toc == b.toc && a.params == b.params));
+  if (!same || (a.path == Path::Separated && elementary_ccd(kind, q, cubic).hit)) {
+    ++tally.differences;
+    ADD_FAILURE() << where << ": with the stage hit=" << a.hit << " toc=" << a.toc << ", without hit=" << b.hit
+                  << " toc=" << b.toc;
+  }
+}
+
+}  // namespace
+
+TEST(Separation, ChangesNoAnswerOfVincent) {
+  for (const Scalar thickness : {0.0, 1e-3}) {
+    StageTally tally;
+    for (const auto& entry : std::filesystem::recursive_directory_iterator(DRAPE_TEST_DATA "/ccd-queries")) {
+      if (entry.path().extension() != ".csv") continue;
+      const QueryFile file = read_query_file(entry.path());
+      for (std::size_t i = 0; i < file.queries.size() && tally.differences < 10; ++i)
+        compare_vincent(file.kind, file.queries[i], thickness, tally, entry.path().string() + " #" + std::to_string(i));
+    }
+    std::uint64_t seed = 31;
+    for (QueryKind kind : {QueryKind::VertexFace, QueryKind::EdgeEdge}) {
+      for (QueryFamily family : ALL_FAMILIES) {
+        const auto queries = generate_queries(family, kind, 10'000, seed++);
+        for (std::size_t i = 0; i < queries.size() && tally.differences < 10; ++i)
+          compare_vincent(kind, queries[i], thickness, tally,
+                          std::string(kind_name(kind)) + "/" + family_name(family) + " #" + std::to_string(i));
+      }
+      for (const Query& q : gather_queries(cloth_like_set(12, 5), kind))
+        compare_vincent(kind, q, thickness, tally, "cloth-like");
+    }
+    std::printf("thickness %g: %zu queries, %zu separated by the stage, %zu differences\n", thickness, tally.queries,
+                tally.separated, tally.differences);
+    EXPECT_EQ(tally.differences, 0u);
+    EXPECT_GT(tally.separated, 1'000u);  // the stage does decide tests here
+  }
+}
+
+TEST(Separation, ConservativeKeepsEveryBuiltContact) {
+  // The families built to touch: the conservative method finds the same contacts with the
+  // stage as without it (the exact references of test_exact_extremes run with it too).
+  for (QueryKind kind : {QueryKind::VertexFace, QueryKind::EdgeEdge}) {
+    for (QueryFamily family : {QueryFamily::Contact, QueryFamily::TouchAtStart, QueryFamily::TouchAtEnd,
+                               QueryFamily::FarFromOrigin, QueryFamily::TinyMotion}) {
+      const auto queries = generate_queries(family, kind, 5'000, 77 + int(family));
+      Options with, without;
+      with.method = without.method = Method::Conservative;
+      without.separation_depth = 0;
+      std::size_t hits = 0;
+      for (std::size_t i = 0; i < queries.size(); ++i) {
+        const Result b = elementary_ccd(kind, queries[i], without);
+        hits += b.hit;
+        if (b.hit) {
+          EXPECT_TRUE(elementary_ccd(kind, queries[i], with).hit)
+              << kind_name(kind) << " " << family_name(family) << " #" << i;
+        }
+      }
+      EXPECT_GT(hits, 0u) << kind_name(kind) << " " << family_name(family);
+    }
+  }
+}
