@@ -154,6 +154,11 @@ Command add_ccd_command(CLI::App& app) {
                   "vincent: subdivision levels before a tangential root is tested at its midpoint")
       ->check(CLI::Range(1, 60))
       ->capture_default_str();
+  cmd->add_option("--separation-depth", o.separation_depth,
+                  "vincent, conservative: halvings towards the cubic's roots before the separating-axis test "
+                  "(0: the paper's filter alone; changes no answer, only the time)")
+      ->check(CLI::Range(0, 30))
+      ->capture_default_str();
   cmd->add_option("--time-tolerance", o.time_tolerance,
                   "conservative: interval width reported as contact when nothing excludes it (step units)")
       ->check(FINITE_NUMBER)

@@ -10,9 +10,16 @@
 #include <cmath>
 #include <limits>
 
+#include <immintrin.h>
+
 #include "drape/ccd/coplanarity.h"
+#include "problem.h"
 
 namespace drape::ccd {
+
+namespace detail {
+bool batch_portable_kernel = false;
+}  // namespace detail
 
 namespace {
 // Tests per TBB task: a few microseconds of work, enough to amortise the scheduling.
@@ -118,6 +125,133 @@ __attribute__((target_clones("avx2", "default"))) void compute_cubics(ChunkCubic
   }
 }
 
+// The scalar gather into c's coordinate arrays, then compute_cubics.
+template <class Pair>
+void gather_cubics(const BatchInput& input, const Pair* pairs, std::size_t n, const std::array<int, 4>& order,
+                   ChunkCubics& c) {
+  for (std::size_t i = 0; i < n; ++i) {
+    const auto index = points(pairs[i]);
+    const Vec3 &s1 = input.start[index[order[0]]], &e1 = input.end[index[order[0]]];
+    const Vec3 &s2 = input.start[index[order[1]]], &e2 = input.end[index[order[1]]];
+    const Vec3 &s3 = input.start[index[order[2]]], &e3 = input.end[index[order[2]]];
+    const Vec3 &s4 = input.start[index[order[3]]], &e4 = input.end[index[order[3]]];
+    for (int k = 0; k < 3; ++k) {
+      c.a0[k][i] = s2[k] - s1[k];
+      c.a1[k][i] = e2[k] - e1[k];
+      c.b0[k][i] = s3[k] - s1[k];
+      c.b1[k][i] = e3[k] - e1[k];
+      c.c0[k][i] = s4[k] - s1[k];
+      c.c1[k][i] = e4[k] - e1[k];
+    }
+  }
+  compute_cubics(c, n);
+}
+
+// The same with AVX2 intrinsics, fused with the gather: four tests at a time, their points
+// loaded straight into registers (x and y as one 128-bit load, then transposed), nothing
+// stored but the results. Every operation is the scalar code's, in its order (no FMA; min and
+// max as std::min and std::max, NaN included), so the bits are the same. About half the
+// instructions of the gather and compute_cubics above, which are the whole cost of a culled test.
+#define DRAPE_AVX2 __attribute__((target("avx2"), always_inline)) inline
+
+struct Lanes3 {
+  __m256d x, y, z;
+};
+
+DRAPE_AVX2 __m256d max4(__m256d a, __m256d b) { return _mm256_blendv_pd(a, b, _mm256_cmp_pd(a, b, _CMP_LT_OQ)); }
+DRAPE_AVX2 __m256d min4(__m256d a, __m256d b) { return _mm256_blendv_pd(a, b, _mm256_cmp_pd(b, a, _CMP_LT_OQ)); }
+DRAPE_AVX2 __m256d abs4(__m256d a) { return _mm256_andnot_pd(_mm256_set1_pd(-0.0), a); }
+
+// Point k of four tests, one coordinate per register.
+DRAPE_AVX2 Lanes3 load4(const Vec3* base, const std::int32_t (&index)[4]) {
+  const double *p0 = base[index[0]].data(), *p1 = base[index[1]].data(), *p2 = base[index[2]].data(),
+               *p3 = base[index[3]].data();
+  const __m256d xy02 = _mm256_insertf128_pd(_mm256_castpd128_pd256(_mm_loadu_pd(p0)), _mm_loadu_pd(p2), 1);
+  const __m256d xy13 = _mm256_insertf128_pd(_mm256_castpd128_pd256(_mm_loadu_pd(p1)), _mm_loadu_pd(p3), 1);
+  return {_mm256_unpacklo_pd(xy02, xy13), _mm256_unpackhi_pd(xy02, xy13), _mm256_set_pd(p3[2], p2[2], p1[2], p0[2])};
+}
+
+DRAPE_AVX2 Lanes3 sub4(const Lanes3& a, const Lanes3& b) {
+  return {_mm256_sub_pd(a.x, b.x), _mm256_sub_pd(a.y, b.y), _mm256_sub_pd(a.z, b.z)};
+}
+
+DRAPE_AVX2 Lanes3 cross4(const Lanes3& u, const Lanes3& v) {
+  return {_mm256_sub_pd(_mm256_mul_pd(u.y, v.z), _mm256_mul_pd(u.z, v.y)),
+          _mm256_sub_pd(_mm256_mul_pd(u.z, v.x), _mm256_mul_pd(u.x, v.z)),
+          _mm256_sub_pd(_mm256_mul_pd(u.x, v.y), _mm256_mul_pd(u.y, v.x))};
+}
+
+DRAPE_AVX2 __m256d dot4(const Lanes3& u, const Lanes3& w) {
+  return _mm256_add_pd(_mm256_add_pd(_mm256_mul_pd(u.x, w.x), _mm256_mul_pd(u.y, w.y)), _mm256_mul_pd(u.z, w.z));
+}
+
+DRAPE_AVX2 __m256d l1_4(const Lanes3& s, const Lanes3& e) {
+  return max4(_mm256_add_pd(_mm256_add_pd(abs4(s.x), abs4(s.y)), abs4(s.z)),
+              _mm256_add_pd(_mm256_add_pd(abs4(e.x), abs4(e.y)), abs4(e.z)));
+}
+
+// Tests [0, n) of pairs, n <= CHUNK, into c (the arrays a0..c1 are not filled).
+template <QueryKind kind, class Pair>
+__attribute__((target("avx2"))) void gather_cubics_avx2(const BatchInput& input, const Pair* pairs, std::size_t n,
+                                                        ChunkCubics& c) {
+  constexpr std::array<int, 4> order = kind == QueryKind::VertexFace ? std::array<int, 4>{1, 2, 3, 0}
+                                                                     : std::array<int, 4>{0, 1, 2, 3};
+  constexpr Scalar unit_roundoff = std::numeric_limits<Scalar>::epsilon() / 2;
+  const __m256d zero = _mm256_setzero_pd();
+  for (std::size_t i = 0; i < n; i += 4) {
+    // The points of four tests (a tail repeats the last test; its lanes are not read).
+    std::int32_t index[4][4];
+    for (int t = 0; t < 4; ++t) {
+      const auto p = points(pairs[std::min(i + t, n - 1)]);
+      for (int k = 0; k < 4; ++k) index[k][t] = p[order[k]];
+    }
+    const Lanes3 s1 = load4(input.start.data(), index[0]), e1 = load4(input.end.data(), index[0]);
+    const Lanes3 A0 = sub4(load4(input.start.data(), index[1]), s1), A1 = sub4(load4(input.end.data(), index[1]), e1);
+    const Lanes3 B0 = sub4(load4(input.start.data(), index[2]), s1), B1 = sub4(load4(input.end.data(), index[2]), e1);
+    const Lanes3 C0 = sub4(load4(input.start.data(), index[3]), s1), C1 = sub4(load4(input.end.data(), index[3]), e1);
+    const Lanes3 b0c0 = cross4(B0, C0), b1c0 = cross4(B1, C0), b0c1 = cross4(B0, C1), b1c1 = cross4(B1, C1);
+    const __m256d three = _mm256_set1_pd(3.0);
+    const __m256d k0 = dot4(A0, b0c0);
+    const __m256d k1 = _mm256_div_pd(_mm256_add_pd(_mm256_add_pd(dot4(A1, b0c0), dot4(A0, b1c0)), dot4(A0, b0c1)), three);
+    const __m256d k2 = _mm256_div_pd(_mm256_add_pd(_mm256_add_pd(dot4(A1, b1c0), dot4(A1, b0c1)), dot4(A0, b1c1)), three);
+    const __m256d k3 = dot4(A1, b1c1);
+    const __m256d a = l1_4(A0, A1), b = l1_4(B0, B1), cc = l1_4(C0, C1);
+    const __m256d e = _mm256_mul_pd(
+        _mm256_mul_pd(_mm256_mul_pd(_mm256_set1_pd(Scalar(COPLANARITY_ERROR_FACTOR) * unit_roundoff), a), b), cc);
+    _mm256_store_pd(&c.coefficient[0][i], k0);
+    _mm256_store_pd(&c.coefficient[1][i], k1);
+    _mm256_store_pd(&c.coefficient[2][i], k2);
+    _mm256_store_pd(&c.coefficient[3][i], k3);
+    _mm256_store_pd(&c.error[i], e);
+    _mm256_store_pd(&c.extent[i], max4(max4(a, b), cc));
+    const __m256d largest = max4(max4(abs4(k0), abs4(k1)), max4(abs4(k2), abs4(k3)));
+    const __m256d lo = min4(min4(k0, k1), min4(k2, k3)), hi = max4(max4(k0, k1), max4(k2, k3));
+    const __m256d resolved = _mm256_cmp_pd(largest, _mm256_mul_pd(_mm256_set1_pd(POORLY_RESOLVED_RATIO), e), _CMP_NLE_UQ);
+    const __m256d one_sign = _mm256_or_pd(_mm256_cmp_pd(lo, zero, _CMP_GT_OQ), _mm256_cmp_pd(hi, zero, _CMP_LT_OQ));
+    const __m256d ends_clear = _mm256_cmp_pd(min4(abs4(k0), abs4(k3)), e, _CMP_GT_OQ);
+    const __m256d minus_e = _mm256_sub_pd(zero, e);
+    const __m256d above = _mm256_and_pd(_mm256_and_pd(_mm256_cmp_pd(k0, e, _CMP_GT_OQ), _mm256_cmp_pd(k1, e, _CMP_GT_OQ)),
+                                        _mm256_and_pd(_mm256_cmp_pd(k2, e, _CMP_GT_OQ), _mm256_cmp_pd(k3, e, _CMP_GT_OQ)));
+    const __m256d below =
+        _mm256_and_pd(_mm256_and_pd(_mm256_cmp_pd(k0, minus_e, _CMP_LT_OQ), _mm256_cmp_pd(k1, minus_e, _CMP_LT_OQ)),
+                      _mm256_and_pd(_mm256_cmp_pd(k2, minus_e, _CMP_LT_OQ), _mm256_cmp_pd(k3, minus_e, _CMP_LT_OQ)));
+    const int culled = _mm256_movemask_pd(_mm256_and_pd(_mm256_and_pd(resolved, one_sign), ends_clear));
+    const int apart = _mm256_movemask_pd(_mm256_and_pd(resolved, _mm256_or_pd(above, below)));
+    for (int t = 0; t < 4; ++t) {
+      c.culled[i + t] = (culled >> t) & 1;
+      c.certainly_apart[i + t] = (apart >> t) & 1;
+    }
+  }
+}
+
+#undef DRAPE_AVX2
+
+// Whether this machine runs the AVX2 kernel (asked once), unless a test asked for the portable one.
+bool use_avx2() {
+  static const bool yes = __builtin_cpu_supports("avx2");
+  return yes && !detail::batch_portable_kernel;
+}
+
 // The tests [begin, end) of one kind: cubics a chunk at a time; dnf and vincent decide the
 // culled ones from the cubic alone, everything else runs the full method on the gathered query.
 // Appends the hits to hits and returns the counters of the range.
@@ -135,22 +269,11 @@ BatchCounters run_range(const BatchInput& input, std::span<const Pair> pairs, co
   ChunkCubics c;
   for (std::size_t first = begin; first < end; first += CHUNK) {
     const std::size_t n = std::min(CHUNK, end - first);
-    for (std::size_t i = 0; i < n; ++i) {
-      const auto index = points(pairs[first + i]);
-      const Vec3 &s1 = input.start[index[order[0]]], &e1 = input.end[index[order[0]]];
-      const Vec3 &s2 = input.start[index[order[1]]], &e2 = input.end[index[order[1]]];
-      const Vec3 &s3 = input.start[index[order[2]]], &e3 = input.end[index[order[2]]];
-      const Vec3 &s4 = input.start[index[order[3]]], &e4 = input.end[index[order[3]]];
-      for (int k = 0; k < 3; ++k) {
-        c.a0[k][i] = s2[k] - s1[k];
-        c.a1[k][i] = e2[k] - e1[k];
-        c.b0[k][i] = s3[k] - s1[k];
-        c.b1[k][i] = e3[k] - e1[k];
-        c.c0[k][i] = s4[k] - s1[k];
-        c.c1[k][i] = e4[k] - e1[k];
-      }
+    if (use_avx2()) {
+      gather_cubics_avx2<kind>(input, pairs.data() + first, n, c);
+    } else {
+      gather_cubics(input, pairs.data() + first, n, order, c);
     }
-    compute_cubics(c, n);
     for (std::size_t i = 0; i < n; ++i) {
       if (filter && c.culled[i]) {
         ++counters.tests;

@@ -104,20 +104,22 @@ Result vincent_method(const Problem& p) {
   // Unreliable roots first, as cubic does: the filter must not cull what cubic would find.
   if (cubic_poorly_resolved(p.cubic)) return degenerate_path(p);
   if (signs_cull(p.cubic)) return Result{};  // resolved: checked just above
+  const int variations = sign_variations(b);
+  if (variations == 0 && !root_possible_at_start(p) && !root_possible_at_end(p)) return Result{};  // culled
+  // The separation stage: wherever the cubic may vanish, the features are apart. That covers
+  // the ends too: a root within rounding of t = 0 or t = 1 lies in the first or last kept
+  // interval, so the inside tests below would fail there as well.
+  if (detail::roots_apart(p.kind, p.query, p.cubic, contact_distance(p), p.options.separation_depth)) {
+    Result apart;
+    apart.path = Path::Separated;
+    return apart;
+  }
   Result result;
   if (root_possible_at_start(p)) {  // the features may start coplanar
     result.path = Path::Solved;
     if (touching_at(p, 0.0, result)) return result;
   }
-  const int variations = sign_variations(b);
-  if (variations == 0 && !root_possible_at_end(p)) return result;  // culled
-  // The separation stage: where the roots are, the features are apart. Both ends must be clear
-  // of a root (a contact right at t = 0 or t = 1 is the inside test's to decide).
-  if (!root_possible_at_start(p) && !root_possible_at_end(p) &&
-      detail::roots_apart(p.kind, p.query, p.cubic, contact_distance(p), p.options.separation_depth)) {
-    result.path = Path::Separated;
-    return result;
-  }
+  if (variations == 0 && !root_possible_at_end(p)) return result;
   result.path = Path::Solved;
   if (variations == 1) {
     // The common case after the cull: one root, bracketed by the ends of the step.

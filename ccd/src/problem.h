@@ -70,6 +70,10 @@ bool apart_over(QueryKind kind, const Query& q, Scalar lo, Scalar hi, Scalar gap
 /// separation (the broad phase's boxes overlap there).
 bool roots_apart(QueryKind kind, const Query& q, const CoplanarityCubic& cubic, Scalar gap, int depth);
 
+/// Tests only: run_batch uses its portable gather and compute_cubics even where the AVX2
+/// kernel could run (both must give the same bits).
+extern bool batch_portable_kernel;
+
 /// The conservative method, and the degenerate path of the others (use_cubic = false: the
 /// cubic says nothing, decide by distance alone).
 Result conservative_search(const Problem& p, bool use_cubic);

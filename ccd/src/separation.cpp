@@ -125,10 +125,13 @@ bool roots_apart(QueryKind kind, const Query& q, const CoplanarityCubic& cubic, 
     const bool drop_left = beyond(left, margin), drop_right = beyond(right, margin);
     if (drop_left & drop_right) return true;  // no root at all (the signs varied, the cubic does not vanish)
     if (!drop_left & !drop_right) break;      // roots on both sides: test the whole interval
+    // The kept half, chosen by indexing rather than branching (which half it is, is random).
     const Scalar mid = 0.5 * (lo + hi);
-    lo = drop_left ? mid : lo;
-    hi = drop_left ? hi : mid;
-    b = drop_left ? right : left;
+    const Scalar los[2] = {lo, mid}, his[2] = {mid, hi};
+    const Bernstein3 halves[2] = {left, right};
+    lo = los[drop_left];
+    hi = his[drop_left];
+    b = halves[drop_left];
   }
   if (lo == 0 && hi == 1) return false;  // the broad phase tested the whole step already
   return apart_over(kind, q, lo, hi, gap);

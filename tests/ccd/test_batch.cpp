@@ -3,11 +3,14 @@
 
 #include "drape/ccd/batch.h"
 #include "drape/ccd/query_generator.h"
+#include "problem.h"
 
 using namespace drape;
 using namespace drape::ccd;
 
-TEST(Batch, MatchesElementaryCallsAndCounts) {
+namespace {
+
+void check_batch_against_elementary_calls() {
   const ClothLikeSet set = cloth_like_set(8, 42);
   std::vector<VertexFacePair> vf;
   std::vector<EdgeEdgePair> ee;
@@ -71,4 +74,15 @@ TEST(Batch, MatchesElementaryCallsAndCounts) {
     EXPECT_EQ(two.counters.culled, out.counters.culled);
     EXPECT_EQ(two.counters.hits, out.counters.hits);
   }
+}
+
+}  // namespace
+
+// On this machine the AVX2 kernel where it has AVX2, and the portable one on every machine.
+TEST(Batch, MatchesElementaryCallsAndCounts) { check_batch_against_elementary_calls(); }
+
+TEST(Batch, PortableKernelMatchesElementaryCallsAndCounts) {
+  detail::batch_portable_kernel = true;
+  check_batch_against_elementary_calls();
+  detail::batch_portable_kernel = false;
 }

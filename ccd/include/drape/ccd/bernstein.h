@@ -18,6 +18,9 @@ using Power3 = std::array<Scalar, 4>;
 /// Sign variations of (b0, b1, b2, b3), zeros skipped. By Descartes' rule applied through
 /// t = 1/(1+x), the number of roots in the open interval is this number minus an even number.
 inline int sign_variations(const Bernstein3& b) {
+  // No zero coefficient (the usual case): count the changes without branching on the signs.
+  if ((b[0] != 0) & (b[1] != 0) & (b[2] != 0) & (b[3] != 0))
+    return ((b[0] < 0) != (b[1] < 0)) + ((b[1] < 0) != (b[2] < 0)) + ((b[2] < 0) != (b[3] < 0));
   int variations = 0;
   int last = 0;
   for (Scalar c : b) {
