@@ -157,7 +157,7 @@ Command add_ccd_command(CLI::App& app) {
   cmd->add_option("--separation-depth", o.separation_depth,
                   "vincent, conservative: halvings towards the cubic's roots before the separating-axis test "
                   "(0: the paper's filter alone; changes no answer, only the time)")
-      ->check(CLI::Range(0, 30))
+      ->check(CLI::Range(0, 6))
       ->capture_default_str();
   cmd->add_option("--time-tolerance", o.time_tolerance,
                   "conservative: interval width reported as contact when nothing excludes it (step units)")

@@ -167,7 +167,7 @@ int main(int argc, char** argv) {
                  "Levels of the filter's separation stage in the timed vincent and conservative runs (0: the paper's "
                  "filter alone; the simulation itself keeps the scene's settings)")
       ->capture_default_str()
-      ->check(CLI::Range(0, 30));
+      ->check(CLI::Range(0, 6));
   app.add_flag("--check", check, "Run the independent penetration check on every frame");
   app.add_flag("--no-feature-boxes", no_feature_boxes,
                "Keep every feature pair of overlapping triangles (the paper's 15 tests per triangle pair)");

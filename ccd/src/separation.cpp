@@ -19,6 +19,9 @@ constexpr Scalar PROJECTION_ERROR_FACTOR = 64.0;
 // their computed cubic changes sign, which may lie just across a sub-interval's end.
 constexpr Scalar TIME_WIDENING = 0x1p-30;
 
+// Deepest tree of halvings (64 sub-intervals).
+constexpr int MAX_SEPARATION_DEPTH = 6;
+
 
 // Whether points [0, split) and [split, 4), as given at two times, project on w to ranges
 // farther apart than need times w's 1-norm.
@@ -110,31 +113,39 @@ bool apart_over(QueryKind kind, const Query& q, Scalar lo, Scalar hi, Scalar gap
 
 bool roots_apart(QueryKind kind, const Query& q, const CoplanarityCubic& cubic, Scalar gap, int depth) {
   if (depth <= 0) return false;
+  depth = std::min(depth, MAX_SEPARATION_DEPTH);
   // A sub-interval holds no root of the exact or the computed cubic, and no sign change of a
   // root finder's evaluation of it, when its coefficients exceed this in one sign: twice the
   // coefficients' error, and the rounding of the halving and of an evaluation in the power
-  // basis (Horner). So every root any method could find lies in the interval kept below.
+  // basis (Horner). So every root any method could find lies in a kept sub-interval.
   const Scalar margin = 2 * cubic.error + 256 * UNIT_ROUNDOFF * max_abs(cubic.b);
-  // Halve towards the roots while all of them lie on one side (a chain, not a tree: cheap and
-  // with few branches); then one axis test over what is left.
-  Scalar lo = 0, hi = 1;
-  Bernstein3 b = cubic.b;
-  for (int level = 0; level < depth; ++level) {
-    Bernstein3 left, right;
-    split_half(b, left, right);
-    const bool drop_left = beyond(left, margin), drop_right = beyond(right, margin);
-    if (drop_left & drop_right) return true;  // no root at all (the signs varied, the cubic does not vanish)
-    if (!drop_left & !drop_right) break;      // roots on both sides: test the whole interval
-    // The kept half, chosen by indexing rather than branching (which half it is, is random).
-    const Scalar mid = 0.5 * (lo + hi);
-    const Scalar los[2] = {lo, mid}, his[2] = {mid, hi};
-    const Bernstein3 halves[2] = {left, right};
-    lo = los[drop_left];
-    hi = his[drop_left];
-    b = halves[drop_left];
+  // The whole tree of halvings, level by level: the splits of one level are independent of
+  // each other, so they run side by side (a chain of dependent splits costs its latency).
+  constexpr int LEAVES = 1 << MAX_SEPARATION_DEPTH;
+  Bernstein3 level[LEAVES];
+  level[0] = cubic.b;
+  for (int d = 0; d < depth; ++d)
+    for (int i = (1 << d) - 1; i >= 0; --i) {
+      const Bernstein3 parent = level[i];  // level[0] is also its own left half
+      split_half(parent, level[2 * i], level[2 * i + 1]);
+    }
+  const int leaves = 1 << depth;
+  std::uint64_t kept = 0;
+  for (int i = 0; i < leaves; ++i) kept |= std::uint64_t(!beyond(level[i], margin)) << i;
+  if (kept == 0) return true;  // the signs varied, but the cubic does not vanish
+  const std::uint64_t all = leaves == 64 ? ~std::uint64_t(0) : (std::uint64_t(1) << leaves) - 1;
+  if (kept == all) return false;  // roots may lie anywhere: the broad phase tested the whole step
+  // Each run of adjacent kept sub-intervals is tested once (a cubic has at most three roots).
+  const Scalar width = Scalar(1) / Scalar(leaves);
+  int runs = 0;
+  while (kept != 0) {
+    const int first = __builtin_ctzll(kept);
+    const int past = first + __builtin_ctzll(~(kept >> first));  // the first dropped one after the run
+    if (++runs > 3) return false;
+    if (!apart_over(kind, q, first * width, past * width, gap)) return false;
+    kept &= past >= 64 ? 0 : (~std::uint64_t(0) << past);
   }
-  if (lo == 0 && hi == 1) return false;  // the broad phase tested the whole step already
-  return apart_over(kind, q, lo, hi, gap);
+  return true;
 }
 
 }  // namespace drape::ccd::detail

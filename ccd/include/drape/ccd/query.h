@@ -66,13 +66,13 @@ struct Options {
   /// (a double root, a tangential contact) is tested at its midpoint. 2^-30 of the step.
   int max_subdivision_depth = 30;
 
-  /// Vincent and conservative (at zero thickness): levels of the separation stage. When the
-  /// cubic has roots in the step, it is halved this many times (de Casteljau) and each
-  /// sub-interval that may hold a root is tested for a separating axis between the features;
-  /// when every one is separated the test ends there (Path::Separated), with the answer the
-  /// root finding would give (no contact) and without it. 0 turns the stage off: the paper's
-  /// filter alone. Costs at most this many axis tests a level on a test that goes on to root
-  /// finding; decides nothing differently.
+  /// Vincent and conservative (at zero thickness): levels of the separation stage, 0 to 6.
+  /// When the cubic may vanish in the step, it is halved this many times (de Casteljau, 2^depth
+  /// sub-intervals) and each run of sub-intervals where it may vanish is tested for a
+  /// separating axis between the features; when every one is separated the test ends there
+  /// (Path::Separated) with the answer root finding would give (no contact), without it.
+  /// 0 turns the stage off: the paper's filter alone. It decides nothing differently; deeper
+  /// separates more tests and costs more on each.
   int separation_depth = 3;
 
   /// Conservative: an interval narrower than this (units of the step) that neither the cubic
