@@ -22,14 +22,12 @@ constexpr Scalar TIME_WIDENING = 0x1p-30;
 // Deepest tree of halvings (64 sub-intervals).
 constexpr int MAX_SEPARATION_DEPTH = 6;
 
-
-// Whether points [0, split) and [split, 4), as given at two times, project on w to ranges
-// farther apart than need times w's 1-norm.
-bool apart_along(const Vec3 (&x)[4][2], int split, const Vec3& w, Scalar need) {
+// Whether the projections p of points [0, split) and [split, 4), at the two times, form ranges
+// farther apart than need. False when anything is NaN (comparisons with NaN are false).
+bool ranges_apart(const Scalar (&p)[4][2], int split, Scalar need) {
   Scalar a_lo = std::numeric_limits<Scalar>::infinity(), a_hi = -a_lo, b_lo = a_lo, b_hi = -a_lo;
   for (int i = 0; i < 4; ++i) {
-    const Scalar p0 = w.dot(x[i][0]), p1 = w.dot(x[i][1]);
-    const Scalar lo = std::min(p0, p1), hi = std::max(p0, p1);
+    const Scalar lo = std::min(p[i][0], p[i][1]), hi = std::max(p[i][0], p[i][1]);
     if (i < split) {
       a_lo = std::min(a_lo, lo);
       a_hi = std::max(a_hi, hi);
@@ -38,9 +36,14 @@ bool apart_along(const Vec3 (&x)[4][2], int split, const Vec3& w, Scalar need) {
       b_hi = std::max(b_hi, hi);
     }
   }
-  const Scalar scaled = need * (std::abs(w[0]) + std::abs(w[1]) + std::abs(w[2]));
-  // False for a zero or non-finite axis: NaN compares false, and a zero axis gives 0 > 0.
-  return (b_lo - a_hi > scaled) || (a_lo - b_hi > scaled);
+  return (b_lo - a_hi > need) || (a_lo - b_hi > need);
+}
+
+// The same on an axis w, with need scaled by w's 1-norm (false for a zero axis: 0 > 0 fails).
+bool apart_along(const Vec3 (&x)[4][2], int split, const Vec3& w, Scalar need) {
+  Scalar p[4][2];
+  for (int i = 0; i < 4; ++i) p[i][0] = w.dot(x[i][0]), p[i][1] = w.dot(x[i][1]);
+  return ranges_apart(p, split, need * (std::abs(w[0]) + std::abs(w[1]) + std::abs(w[2])));
 }
 
 // certainly_nonzero without branches: the signs are random here, and mispredicted branches
@@ -68,18 +71,9 @@ bool apart_over(QueryKind kind, const Query& q, Scalar lo, Scalar hi, Scalar gap
   const Scalar need = gap + PROJECTION_ERROR_FACTOR * UNIT_ROUNDOFF * largest;
   // The coordinate axes first: the cheapest, and enough for most far crossings.
   for (int k = 0; k < 3; ++k) {
-    Scalar a_lo = std::numeric_limits<Scalar>::infinity(), a_hi = -a_lo, b_lo = a_lo, b_hi = -a_lo;
-    for (int i = 0; i < 4; ++i) {
-      const Scalar l = std::min(x[i][0][k], x[i][1][k]), h = std::max(x[i][0][k], x[i][1][k]);
-      if (i < split) {
-        a_lo = std::min(a_lo, l);
-        a_hi = std::max(a_hi, h);
-      } else {
-        b_lo = std::min(b_lo, l);
-        b_hi = std::max(b_hi, h);
-      }
-    }
-    if ((b_lo - a_hi > need) || (a_lo - b_hi > need)) return true;
+    Scalar p[4][2];
+    for (int i = 0; i < 4; ++i) p[i][0] = x[i][0][k], p[i][1] = x[i][1][k];
+    if (ranges_apart(p, split, need)) return true;
   }
   // An axis from the features' shape at the interval's midpoint (any fixed axis is valid;
   // these separate the features where they are coplanar, which is where the cubic's roots are).
