@@ -115,12 +115,16 @@ void print(const std::string& title, const std::vector<Row>& rows) {
   }
 }
 
+// The separation stage's depth for every run of vincent and conservative (--separation-depth).
+int separation_depth = Options{}.separation_depth;
+
 void target(bool met, const std::string& text) { std::printf("  [%s] %s\n", met ? "met" : "NOT MET", text.c_str()); }
 
 // The slowest single query: the median of repeated runs of each query, maximised.
 std::pair<double, std::string> slowest_query(const std::vector<QueryFile>& files, Method method) {
   Options options;
   options.method = method;
+  options.separation_depth = separation_depth;
   double worst = 0;
   std::string where;
   for (const QueryFile& f : files) {
@@ -149,6 +153,10 @@ int main(int argc, char** argv) {
   app.add_option("--passes", passes, "Timed passes; medians are reported")->check(CLI::Range(1, 1000))->capture_default_str();
   app.add_option("--grid", grid, "Cloth-like set: grid cells per side")->check(CLI::Range(2, 200))->capture_default_str();
   app.add_option("--data", data, "Folder of ground-truth query files")->check(CLI::ExistingDirectory)->capture_default_str();
+  app.add_option("--separation-depth", separation_depth,
+                 "Levels of the filter's separation stage (vincent, conservative); 0: the paper's filter alone")
+      ->check(CLI::Range(0, 6))
+      ->capture_default_str();
   CLI11_PARSE(app, argc, argv);
 
   std::vector<Contender> contenders;
@@ -156,6 +164,7 @@ int main(int argc, char** argv) {
     contenders.push_back({std::string(method_name(m)), true, true, [m](QueryKind kind, const Query& q) {
                             Options options;
                             options.method = m;
+                            options.separation_depth = separation_depth;
                             return elementary_ccd(kind, q, options).hit;
                           }});
   }
@@ -200,6 +209,7 @@ int main(int argc, char** argv) {
   for (int m = 0; m < 4; ++m) {
     Options options;
     options.method = ALL_METHODS[m];
+    options.separation_depth = separation_depth;
     std::vector<double> seconds;
     for (int p = 0; p < passes; ++p) {
       const auto begin = std::chrono::steady_clock::now();

@@ -73,7 +73,7 @@ struct Options {
   /// (Path::Separated) with the answer root finding would give (no contact), without it.
   /// 0 turns the stage off: the paper's filter alone. It decides nothing differently; deeper
   /// separates more tests and costs more on each.
-  int separation_depth = 3;
+  int separation_depth = 2;
 
   /// Conservative: an interval narrower than this (units of the step) that neither the cubic
   /// nor the distance bound excludes is reported as a contact at its start. It bounds both the
