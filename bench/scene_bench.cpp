@@ -165,7 +165,7 @@ int main(int argc, char** argv) {
       ->check(CLI::Range(1, 256));
   app.add_option("--separation-depth", separation_depth,
                  "Levels of the filter's separation stage in the timed vincent and conservative runs (0: the paper's "
-                 "filter alone; the simulation itself keeps the scene's settings)")
+                 "filter alone; the simulation itself runs with the default, which decides the same)")
       ->capture_default_str()
       ->check(CLI::Range(0, 6));
   app.add_flag("--check", check, "Run the independent penetration check on every frame");
@@ -248,7 +248,8 @@ int main(int argc, char** argv) {
     for (int m = 0; m < 4; ++m) runs[m] = time_method(current, ccd::ALL_METHODS[m], passes, separation_depth);
     // vincent with the sign filter alone (no separation stage): the paper's method, side by side.
     runs[PAPER] = time_method(current, ccd::Method::Vincent, passes, 0);
-    // Disagreements: cubic or dnf against vincent (the filter must not change a hit), and
+    // Disagreements: cubic, dnf or the paper's filter alone against vincent (no filter and no
+    // stage of it may change a hit), and
     // hits of vincent the conservative method does not report (it answers exact contact; the
     // root-finding methods accept a distance of contact_tolerance times the extent at a root).
     long diff = 0, near = 0;

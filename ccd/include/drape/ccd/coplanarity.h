@@ -29,7 +29,7 @@ using CoplanarityCubic = CoplanarityCubicT<Scalar>;
 
 /// The query's points as x1..x4 of the paper: vertex-face (face[0], face[1], face[2], vertex),
 /// edge-edge (edge_a[0], edge_a[1], edge_b[0], edge_b[1]).
-inline std::array<int, 4> coplanarity_order(QueryKind kind) {
+constexpr std::array<int, 4> coplanarity_order(QueryKind kind) {
   return kind == QueryKind::VertexFace ? std::array<int, 4>{1, 2, 3, 0} : std::array<int, 4>{0, 1, 2, 3};
 }
 
