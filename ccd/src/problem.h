@@ -54,20 +54,20 @@ inline Scalar max_abs_coordinate(const Query& q) {
 
 /// Whether the features stay more than gap apart at every time in [lo, hi] (widened by 2^-30 of
 /// the step on each side), shown by a separating axis: the coordinate axes, and axes from the
-/// features' shape at the interval's midpoint (the triangle's edge normals in its plane; the
-/// edges' normals in the plane of both, and their directions). A linearly moving point's
-/// projection on a fixed axis is linear in t, so its range over [lo, hi] is spanned by its
-/// projections at lo and hi. Rounding is covered by a margin of 64 u times the largest
+/// features' shape at the interval's midpoint (the in-plane normal of the triangle edge the
+/// vertex lies farthest outside of; the two edges' normals in the plane of both). A linearly
+/// moving point's projection on a fixed axis is linear in t, so its range over [lo, hi] is
+/// spanned by its projections at lo and hi. Rounding is covered by a margin of 64 u times the largest
 /// coordinate. separation.cpp.
 bool apart_over(QueryKind kind, const Query& q, Scalar lo, Scalar hi, Scalar gap);
 
-/// The filter's separation stage: the step is halved down to depth levels (de Casteljau); a
-/// sub-interval is dropped when the cubic certainly has no root on it (its coefficients exceed
-/// twice their error bound and the rounding of any root finder's evaluation, in one sign) or
-/// when the features are apart on it (apart_over). True when every sub-interval is dropped:
-/// at every root of the cubic in the step, computed or exact, the features are more than gap
-/// apart. depth 0 (or less) returns false. The whole step itself is never tested for
-/// separation (the broad phase's boxes overlap there).
+/// The filter's separation stage: the step is halved depth times (de Casteljau, 2^depth
+/// sub-intervals, depth at most 6); a sub-interval is dropped when the cubic certainly has no
+/// root on it (its coefficients exceed twice their error bound and the rounding of any root
+/// finder's evaluation, in one sign), and each run of adjacent kept sub-intervals (at most
+/// three) must be apart (apart_over). True when they all are: at every root of the cubic in the
+/// step, computed or exact, the features are more than gap apart. depth 0 (or less) returns
+/// false, and so does a run covering the whole step (the broad phase's boxes overlap there).
 bool roots_apart(QueryKind kind, const Query& q, const CoplanarityCubic& cubic, Scalar gap, int depth);
 
 /// Tests only: run_batch uses its portable gather and compute_cubics even where the AVX2

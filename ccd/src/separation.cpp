@@ -46,14 +46,6 @@ bool apart_along(const Vec3 (&x)[4][2], int split, const Vec3& w, Scalar need) {
   return ranges_apart(p, split, need * (std::abs(w[0]) + std::abs(w[1]) + std::abs(w[2])));
 }
 
-// certainly_nonzero without branches: the signs are random here, and mispredicted branches
-// cost more than the comparisons.
-bool beyond(const Bernstein3& b, Scalar margin) {
-  const Scalar lo = std::min(std::min(b[0], b[1]), std::min(b[2], b[3]));
-  const Scalar hi = std::max(std::max(b[0], b[1]), std::max(b[2], b[3]));
-  return (lo > margin) | (hi < -margin);
-}
-
 }  // namespace
 
 bool apart_over(QueryKind kind, const Query& q, Scalar lo, Scalar hi, Scalar gap) {
@@ -61,14 +53,12 @@ bool apart_over(QueryKind kind, const Query& q, Scalar lo, Scalar hi, Scalar gap
   hi = std::min(Scalar(1), hi + TIME_WIDENING);
   const int split = kind == QueryKind::VertexFace ? 1 : 2;  // the vertex, or edge_a, against the rest
   Vec3 x[4][2];
-  Scalar largest = 0;
   for (int i = 0; i < 4; ++i) {
     const Vec3 motion = q.end[i] - q.start[i];
     x[i][0] = q.start[i] + lo * motion;
     x[i][1] = q.start[i] + hi * motion;
-    largest = std::max(largest, std::max(q.start[i].cwiseAbs().maxCoeff(), q.end[i].cwiseAbs().maxCoeff()));
   }
-  const Scalar need = gap + PROJECTION_ERROR_FACTOR * UNIT_ROUNDOFF * largest;
+  const Scalar need = gap + PROJECTION_ERROR_FACTOR * UNIT_ROUNDOFF * max_abs_coordinate(q);
   // The coordinate axes first: the cheapest, and enough for most far crossings.
   for (int k = 0; k < 3; ++k) {
     Scalar p[4][2];
@@ -125,7 +115,7 @@ bool roots_apart(QueryKind kind, const Query& q, const CoplanarityCubic& cubic, 
     }
   const int leaves = 1 << depth;
   std::uint64_t kept = 0;
-  for (int i = 0; i < leaves; ++i) kept |= std::uint64_t(!beyond(level[i], margin)) << i;
+  for (int i = 0; i < leaves; ++i) kept |= std::uint64_t(!certainly_nonzero(level[i], margin)) << i;
   if (kept == 0) return true;  // the signs varied, but the cubic does not vanish
   const std::uint64_t all = leaves == 64 ? ~std::uint64_t(0) : (std::uint64_t(1) << leaves) - 1;
   if (kept == all) return false;  // roots may lie anywhere: the broad phase tested the whole step

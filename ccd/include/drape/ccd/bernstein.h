@@ -44,10 +44,12 @@ inline bool same_strict_sign(const Bernstein3& b) {
 /// True when every coefficient exceeds margin in one sign: the cubic is then certainly
 /// nonzero on the interval even if each coefficient is off by up to margin. Any precision (the
 /// conservative method also works in long double).
+/// Without branches (& and | rather than && and ||): the signs are random in a cloth step and a
+/// mispredicted branch costs more than the comparisons. A NaN coefficient gives false.
 template <class T>
 bool certainly_nonzero(const std::array<T, 4>& b, T margin) {
-  return (b[0] > margin && b[1] > margin && b[2] > margin && b[3] > margin) ||
-         (b[0] < -margin && b[1] < -margin && b[2] < -margin && b[3] < -margin);
+  return ((b[0] > margin) & (b[1] > margin) & (b[2] > margin) & (b[3] > margin)) |
+         ((b[0] < -margin) & (b[1] < -margin) & (b[2] < -margin) & (b[3] < -margin));
 }
 
 /// de Casteljau split at the interval's midpoint: the coefficients on each half.
