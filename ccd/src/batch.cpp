@@ -85,8 +85,9 @@ std::array<std::int32_t, 4> points(const VertexFacePair& p) { return {p.vertex, 
 std::array<std::int32_t, 4> points(const EdgeEdgePair& p) { return {p.edge_a[0], p.edge_a[1], p.edge_b[0], p.edge_b[1]}; }
 
 // coplanarity_cubic_in<Scalar> for n tests at once, operation for operation (the results are the
-// same bits; the batch test compares them with the one-query entry points).
-__attribute__((target_clones("avx2", "default"))) void compute_cubics(ChunkCubics& c, std::size_t n) {
+// same bits; the batch test compares them with the one-query entry points). The portable path:
+// machines with AVX2 run gather_cubics_avx2 below instead, so this needs no AVX2 clone.
+void compute_cubics(ChunkCubics& c, std::size_t n) {
   constexpr Scalar unit_roundoff = std::numeric_limits<Scalar>::epsilon() / 2;
   for (std::size_t i = 0; i < n; ++i) {
     const auto cross = [&](const Scalar (*u)[CHUNK], const Scalar (*v)[CHUNK], Scalar out[3]) {
