@@ -10,7 +10,9 @@
 // An interval that survives to the time tolerance is a contact at its start. Double precision
 // cannot tell a touch from a near miss of about 1e-15 of the coordinates; so, for exact contact
 // (zero thickness), the interval is searched again in long double (64-bit mantissa) before a
-// contact is reported. The same algorithm serves both precisions.
+// contact is reported; a cubic that double precision cannot resolve (coplanar motion) is
+// searched in double only until the first undecided interval, and in long double from there.
+// The same algorithm serves both precisions.
 #include "problem.h"
 
 namespace drape::ccd::detail {
@@ -28,6 +30,8 @@ constexpr Scalar WINDOW_ROOT_FRACTION = 1e-3;
 // interval budget (bounds the worst case, an exactly coplanar sliding motion).
 constexpr int EXTENDED_EXTRA_LEVELS = 34;
 constexpr int EXTENDED_MAX_INTERVALS = 256;
+// A nearly coplanar motion's search in double, before the long-double one: its interval budget.
+constexpr int COPLANAR_DOUBLE_INTERVALS = 512;
 constexpr int STACK_SIZE = 160;  // depth-first: at most one pending sibling per level
 
 using Extended = long double;
@@ -85,6 +89,8 @@ struct Setup {
   T time_tolerance;
   int max_intervals;
   bool refine_in_extended;  // double search: re-examine undecided intervals in long double
+  bool rest_in_extended;    // double search: at the first undecided interval or when out of
+                            // budget, search the rest of the step in long double instead
 };
 
 template <class T>
@@ -99,6 +105,7 @@ Setup<T> make_setup(const Problem& p, bool use_cubic, const Coefficients<T>& b, 
                   T(SUBDIVISION_ERROR_FACTOR) * u * max_abs(b),
                   T(o.time_tolerance),
                   o.max_intervals,
+                  false,
                   false};
 }
 
@@ -119,8 +126,10 @@ struct Outcome {
   int examined = 0;
 };
 
-// Whether [lo, hi] certainly holds no exact contact, searched in long double.
-Outcome<Extended> extended_search(const Problem& p, bool use_cubic, Scalar lo, Scalar hi);
+// Whether [lo, hi] certainly holds no exact contact, searched in long double: below an
+// interval double precision left undecided (a fine time tolerance and a small budget), or, with
+// rest_of_step, over [lo, 1] with the options' tolerance and budget.
+Outcome<Extended> extended_search(const Problem& p, bool use_cubic, Scalar lo, Scalar hi, bool rest_of_step = false);
 
 template <class T>
 Outcome<T> search(const Setup<T>& setup, Interval<T> first) {
@@ -130,8 +139,22 @@ Outcome<T> search(const Setup<T>& setup, Interval<T> first) {
   stack[top++] = first;
   Outcome<T> out;
 
+  // The rest of the step from lo, searched in long double, decides.
+  const auto rest_in_extended = [&](T lo) {
+    const auto fine = extended_search(p, setup.use_cubic, Scalar(lo), 1.0, /*rest_of_step=*/true);
+    out.examined += fine.examined;
+    out.hit = fine.hit;
+    out.toc = T(fine.toc);
+    out.params = fine.params;
+    out.budget_spent = fine.budget_spent;
+  };
+
   // An undecided interval: a contact, unless the extended search clears it.
   const auto undecided = [&](const Interval<T>& I, T toc, Vec2 params) {
+    if (setup.rest_in_extended) {
+      rest_in_extended(I.lo);
+      return true;
+    }
     if (setup.refine_in_extended) {
       const auto fine = extended_search(p, setup.use_cubic, Scalar(I.lo), Scalar(I.hi));
       out.examined += fine.examined;
@@ -186,6 +209,10 @@ Outcome<T> search(const Setup<T>& setup, Interval<T> first) {
     const auto prox = proximity_at<T>(p.kind, p.query, mid);
     if (prox.distance - prox.error - setup.distance_margin > width / 2 * setup.speed) continue;
     if (out.examined >= setup.max_intervals || top + 2 > STACK_SIZE) {
+      if (setup.rest_in_extended) {
+        rest_in_extended(I.lo);
+        break;
+      }
       // Out of budget: a contact at the earliest time not yet excluded.
       out.budget_spent = true;
       out.hit = true;
@@ -205,7 +232,7 @@ Outcome<T> search(const Setup<T>& setup, Interval<T> first) {
   return out;
 }
 
-Outcome<Extended> extended_search(const Problem& p, bool use_cubic, Scalar lo, Scalar hi) {
+Outcome<Extended> extended_search(const Problem& p, bool use_cubic, Scalar lo, Scalar hi, bool rest_of_step) {
   using T = Extended;
   const auto cubic = coplanarity_cubic_in<T>(p.kind, p.query);
   // The coefficients on [lo, hi]: two splits, at lo and then at hi within [lo, 1].
@@ -214,7 +241,7 @@ Outcome<Extended> extended_search(const Problem& p, bool use_cubic, Scalar lo, S
   Coefficients<T> on_interval = right;
   if (hi < 1) split_at<T>(right, (T(hi) - T(lo)) / (1 - T(lo)), on_interval, left);
   Setup<T> setup = make_setup<T>(p, use_cubic, cubic.b, cubic.error);
-  if (lo > 0 || hi < 1) {
+  if ((lo > 0 || hi < 1) && !rest_of_step) {
     // Below an interval double precision left undecided.
     setup.time_tolerance = (T(hi) - T(lo)) * std::ldexp(T(1), -EXTENDED_EXTRA_LEVELS);
     setup.max_intervals = EXTENDED_MAX_INTERVALS;
@@ -261,10 +288,22 @@ Result conservative_search(const Problem& p, bool use_cubic) {
   }
   Outcome<Scalar> out;
   if (exact_contact && cubic_poorly_resolved(p.cubic)) {
-    // Coplanar, or nearly, to double precision: the whole step is searched in long double,
-    // where the cubic may still tell (its rounding error is 2^11 times smaller).
-    const auto fine = extended_search(p, use_cubic, 0.0, 1.0);
-    out = Outcome<Scalar>{fine.hit, Scalar(fine.toc), fine.params, fine.budget_spent, fine.culled, fine.examined};
+    // Coplanar, or nearly, to double precision. The cubic in long double (rounding error 2^11
+    // times smaller) may still exclude the whole step. If not, a search in double excludes
+    // what it can by distance (its error, about 1e-15 of the coordinates, is far below the gaps
+    // of most such motions), earliest first, within a small budget; from the first interval it
+    // cannot decide, the rest of the step is searched in long double, where an interval costs
+    // several double ones.
+    const auto fine_cubic = coplanarity_cubic_in<Extended>(p.kind, p.query);
+    if (certainly_nonzero(fine_cubic.b, fine_cubic.error)) {
+      out.culled = true;
+      out.examined = 1;
+    } else {
+      Setup<Scalar> setup = make_setup<Scalar>(p, use_cubic, p.cubic.b, p.cubic.error);
+      setup.max_intervals = std::min(setup.max_intervals, COPLANAR_DOUBLE_INTERVALS);
+      setup.rest_in_extended = true;
+      out = search<Scalar>(setup, Interval<Scalar>{0.0, 1.0, p.cubic.b, 0});
+    }
   } else {
     Setup<Scalar> setup = make_setup<Scalar>(p, use_cubic, p.cubic.b, p.cubic.error);
     setup.refine_in_extended = exact_contact;
