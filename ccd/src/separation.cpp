@@ -46,6 +46,21 @@ bool apart_along(const Vec3 (&x)[4][2], int split, const Vec3& w, Scalar need) {
   return ranges_apart(p, split, need * (std::abs(w[0]) + std::abs(w[1]) + std::abs(w[2])));
 }
 
+// The tree of halvings below b, DEPTH levels deep: bit i set when leaf i (left to right) may
+// hold a root, that is when its coefficients are not certainly nonzero. Written as a recursion
+// the compiler unrolls, so the coefficients stay in registers: the splits of one level are
+// independent of each other and run side by side (a loop over an array of levels cost twice).
+template <int DEPTH>
+std::uint64_t kept_leaves(const Bernstein3& b, Scalar margin) {
+  if constexpr (DEPTH == 0) {
+    return std::uint64_t(!certainly_nonzero(b, margin));
+  } else {
+    Bernstein3 left, right;
+    split_half(b, left, right);
+    return kept_leaves<DEPTH - 1>(left, margin) | (kept_leaves<DEPTH - 1>(right, margin) << (1 << (DEPTH - 1)));
+  }
+}
+
 }  // namespace
 
 bool apart_over(QueryKind kind, const Query& q, Scalar lo, Scalar hi, Scalar gap) {
@@ -103,19 +118,16 @@ bool roots_apart(QueryKind kind, const Query& q, const CoplanarityCubic& cubic, 
   // coefficients' error, and the rounding of the halving and of an evaluation in the power
   // basis (Horner). So every root any method could find lies in a kept sub-interval.
   const Scalar margin = 2 * cubic.error + 256 * UNIT_ROUNDOFF * max_abs(cubic.b);
-  // The whole tree of halvings, level by level: the splits of one level are independent of
-  // each other, so they run side by side (a chain of dependent splits costs its latency).
-  constexpr int LEAVES = 1 << MAX_SEPARATION_DEPTH;
-  Bernstein3 level[LEAVES];
-  level[0] = cubic.b;
-  for (int d = 0; d < depth; ++d)
-    for (int i = (1 << d) - 1; i >= 0; --i) {
-      const Bernstein3 parent = level[i];  // level[0] is also its own left half
-      split_half(parent, level[2 * i], level[2 * i + 1]);
-    }
-  const int leaves = 1 << depth;
   std::uint64_t kept = 0;
-  for (int i = 0; i < leaves; ++i) kept |= std::uint64_t(!certainly_nonzero(level[i], margin)) << i;
+  switch (depth) {
+    case 1: kept = kept_leaves<1>(cubic.b, margin); break;
+    case 2: kept = kept_leaves<2>(cubic.b, margin); break;
+    case 3: kept = kept_leaves<3>(cubic.b, margin); break;
+    case 4: kept = kept_leaves<4>(cubic.b, margin); break;
+    case 5: kept = kept_leaves<5>(cubic.b, margin); break;
+    default: kept = kept_leaves<6>(cubic.b, margin); break;
+  }
+  const int leaves = 1 << depth;
   if (kept == 0) return true;  // the signs varied, but the cubic does not vanish
   const std::uint64_t all = leaves == 64 ? ~std::uint64_t(0) : (std::uint64_t(1) << leaves) - 1;
   if (kept == all) return false;  // roots may lie anywhere: the broad phase tested the whole step
