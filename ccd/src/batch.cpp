@@ -17,10 +17,6 @@
 
 namespace drape::ccd {
 
-namespace detail {
-bool batch_portable_kernel = false;
-}  // namespace detail
-
 namespace {
 // Tests per TBB task: a few microseconds of work, enough to amortise the scheduling.
 constexpr std::size_t GRAIN = 256;
@@ -249,7 +245,7 @@ __attribute__((target("avx2"))) void gather_cubics_avx2(const BatchInput& input,
 // Whether this machine runs the AVX2 kernel (asked once), unless a test asked for the portable one.
 bool use_avx2() {
   static const bool yes = __builtin_cpu_supports("avx2");
-  return yes && !detail::batch_portable_kernel;
+  return yes && !detail::portable_kernels;
 }
 
 // The tests [begin, end) of one kind: cubics a chunk at a time; dnf and vincent decide the

@@ -185,15 +185,15 @@ Result run(QueryKind kind, const Query& query, const Options& options, const Cop
 }  // namespace
 
 Result vertex_face_ccd(const VertexFaceQuery& query, const Options& options) {
-  return run(QueryKind::VertexFace, query, options, coplanarity_cubic(QueryKind::VertexFace, query));
+  return run(QueryKind::VertexFace, query, options, detail::query_cubic(QueryKind::VertexFace, query));
 }
 
 Result edge_edge_ccd(const EdgeEdgeQuery& query, const Options& options) {
-  return run(QueryKind::EdgeEdge, query, options, coplanarity_cubic(QueryKind::EdgeEdge, query));
+  return run(QueryKind::EdgeEdge, query, options, detail::query_cubic(QueryKind::EdgeEdge, query));
 }
 
 Result elementary_ccd(QueryKind kind, const Query& query, const Options& options) {
-  return run(kind, query, options, coplanarity_cubic(kind, query));
+  return run(kind, query, options, detail::query_cubic(kind, query));
 }
 
 Result elementary_ccd(QueryKind kind, const Query& query, const Options& options, const CoplanarityCubic& cubic) {

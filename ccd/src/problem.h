@@ -70,9 +70,13 @@ bool apart_over(QueryKind kind, const Query& q, Scalar lo, Scalar hi, Scalar gap
 /// false, and so does a run covering the whole step (the broad phase's boxes overlap there).
 bool roots_apart(QueryKind kind, const Query& q, const CoplanarityCubic& cubic, Scalar gap, int depth);
 
-/// Tests only: run_batch uses its portable gather and compute_cubics even where the AVX2
-/// kernel could run (both must give the same bits).
-extern bool batch_portable_kernel;
+/// Tests only: the portable code even where the AVX2 kernels could run (run_batch's gather and
+/// compute_cubics, query_cubic's coplanarity_cubic); both must give the same bits.
+extern bool portable_kernels;
+
+/// coplanarity_cubic(kind, query) bit for bit, with AVX2 where the machine has it: the
+/// one-query entry points start here. coplanarity.cpp.
+CoplanarityCubic query_cubic(QueryKind kind, const Query& query);
 
 /// The conservative method, and the degenerate path of the others (use_cubic = false: the
 /// cubic says nothing, decide by distance alone).

@@ -82,7 +82,7 @@ void check_batch_against_elementary_calls() {
 TEST(Batch, MatchesElementaryCallsAndCounts) { check_batch_against_elementary_calls(); }
 
 TEST(Batch, PortableKernelMatchesElementaryCallsAndCounts) {
-  detail::batch_portable_kernel = true;
+  detail::portable_kernels = true;
   check_batch_against_elementary_calls();
-  detail::batch_portable_kernel = false;
+  detail::portable_kernels = false;
 }

@@ -1,9 +1,13 @@
 // The coplanarity cubic: its coefficients against direct evaluation of d(t), and its error bound.
 #include <gtest/gtest.h>
 
+#include <cstring>
+#include <limits>
 #include <random>
 
 #include "drape/ccd/coplanarity.h"
+#include "drape/ccd/query_generator.h"
+#include "problem.h"
 
 using namespace drape;
 using namespace drape::ccd;
@@ -76,4 +80,43 @@ TEST(Coplanarity, ErrorBoundCoversTheRoundingAtLargeOffsets) {
     // by about 1e6 u |A||B| per unit |C| change; allow it, and check the computed bound is honest.
     for (int i = 0; i < 4; ++i) EXPECT_LE(std::abs(cubic.b[i] - exact.b[i]), cubic.error + 1e-7) << i;
   }
+}
+
+// The one-query entry points' cubic (AVX2 where this machine has it) against the reference
+// template, bit for bit: every family and scale of the generator, a cloth-like set, signed
+// zeros, and non-finite coordinates (NaN and infinities must come out the same way too).
+TEST(Coplanarity, OneQueryKernelMatchesTheReferenceBitForBit) {
+  std::vector<std::pair<QueryKind, Query>> queries;
+  std::uint64_t seed = 11;
+  for (QueryKind kind : {QueryKind::VertexFace, QueryKind::EdgeEdge}) {
+    for (QueryFamily family : ALL_FAMILIES)
+      for (Scalar scale : {1e-8, 1.0, 1e8})
+        for (const Query& q : generate_queries(family, kind, 2000, ++seed, scale)) queries.push_back({kind, q});
+    for (const Query& q : gather_queries(cloth_like_set(6, 5), kind)) queries.push_back({kind, q});
+  }
+  // Special values in one coordinate of otherwise ordinary queries.
+  const Scalar specials[] = {0.0, -0.0, std::numeric_limits<Scalar>::quiet_NaN(),
+                             std::numeric_limits<Scalar>::infinity(), -std::numeric_limits<Scalar>::infinity(),
+                             std::numeric_limits<Scalar>::denorm_min(), 1e300};
+  std::mt19937_64 rng(12);
+  for (int trial = 0; trial < 2000; ++trial) {
+    Query q = random_query(rng);
+    q.start[trial % 4][trial % 3] = specials[trial % 7];
+    if (trial % 5 == 0) q.end[(trial / 4) % 4] = q.start[(trial / 4) % 4];  // a point at rest
+    queries.push_back({trial % 2 ? QueryKind::EdgeEdge : QueryKind::VertexFace, q});
+  }
+  const auto same_bits = [](Scalar a, Scalar b) { return std::memcmp(&a, &b, sizeof a) == 0; };
+  for (bool portable : {false, true}) {
+    detail::portable_kernels = portable;
+    std::size_t differences = 0;
+    for (const auto& [kind, q] : queries) {
+      const CoplanarityCubic reference = coplanarity_cubic(kind, q);
+      const CoplanarityCubic fast = detail::query_cubic(kind, q);
+      bool same = same_bits(reference.error, fast.error) && same_bits(reference.extent, fast.extent);
+      for (int i = 0; i < 4; ++i) same = same && same_bits(reference.b[i], fast.b[i]);
+      differences += !same;
+    }
+    EXPECT_EQ(differences, 0u) << "of " << queries.size() << (portable ? " (portable)" : " (AVX2 if present)");
+  }
+  detail::portable_kernels = false;
 }
