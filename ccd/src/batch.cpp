@@ -10,9 +10,8 @@
 #include <cmath>
 #include <limits>
 
-#include <immintrin.h>
-
 #include "drape/ccd/coplanarity.h"
+#include "avx2.h"
 #include "problem.h"
 
 namespace drape::ccd {
@@ -149,15 +148,13 @@ void gather_cubics(const BatchInput& input, const Pair* pairs, std::size_t n, co
 // stored but the results. Every operation is the scalar code's, in its order (no FMA; min and
 // max as std::min and std::max, NaN included), so the bits are the same. About half the
 // instructions of the gather and compute_cubics above, which are the whole cost of a culled test.
-#define DRAPE_AVX2 __attribute__((target("avx2"), always_inline)) inline
+using detail::abs4;
+using detail::max4;
+using detail::min4;
 
 struct Lanes3 {
   __m256d x, y, z;
 };
-
-DRAPE_AVX2 __m256d max4(__m256d a, __m256d b) { return _mm256_blendv_pd(a, b, _mm256_cmp_pd(a, b, _CMP_LT_OQ)); }
-DRAPE_AVX2 __m256d min4(__m256d a, __m256d b) { return _mm256_blendv_pd(a, b, _mm256_cmp_pd(b, a, _CMP_LT_OQ)); }
-DRAPE_AVX2 __m256d abs4(__m256d a) { return _mm256_andnot_pd(_mm256_set1_pd(-0.0), a); }
 
 // Point k of four tests, one coordinate per register.
 DRAPE_AVX2 Lanes3 load4(const Vec3* base, const std::int32_t (&index)[4]) {
@@ -240,13 +237,6 @@ __attribute__((target("avx2"))) void gather_cubics_avx2(const BatchInput& input,
   }
 }
 
-#undef DRAPE_AVX2
-
-// Whether this machine runs the AVX2 kernel (asked once), unless a test asked for the portable one.
-bool use_avx2() {
-  static const bool yes = __builtin_cpu_supports("avx2");
-  return yes && !detail::portable_kernels;
-}
 
 // The tests [begin, end) of one kind: cubics a chunk at a time; dnf and vincent decide the
 // culled ones from the cubic alone, everything else runs the full method on the gathered query.
@@ -263,7 +253,7 @@ BatchCounters run_range(const BatchInput& input, std::span<const Pair> pairs, co
   ChunkCubics c;
   for (std::size_t first = begin; first < end; first += CHUNK) {
     const std::size_t n = std::min(CHUNK, end - first);
-    if (use_avx2()) {
+    if (detail::avx2_enabled()) {
       gather_cubics_avx2<kind>(input, pairs.data() + first, n, c);
     } else {
       gather_cubics(input, pairs.data() + first, n, order, c);

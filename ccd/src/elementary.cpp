@@ -103,7 +103,7 @@ Result vincent_method(const Problem& p) {
   const Bernstein3& b = p.cubic.b;
   // Unreliable roots first, as cubic does: the filter must not cull what cubic would find.
   if (cubic_poorly_resolved(p.cubic)) return degenerate_path(p);
-  if (signs_cull(p.cubic)) return Result{};  // resolved: checked just above
+  // (The sign cull came first, in run.)
   const int variations = sign_variations(b);
   if (variations == 0 && !root_possible_at_start(p) && !root_possible_at_end(p)) return Result{};  // culled
   // The separation stage: wherever the cubic may vanish, the features are apart. That covers
@@ -172,6 +172,9 @@ Result vincent_method(const Problem& p) {
 }
 
 Result run(QueryKind kind, const Query& query, const Options& options, const CoplanarityCubic& cubic) {
+  // The filter's cull first, as dnf_method and vincent_method begin: most tests of a cloth step
+  // end here, before anything else is set up.
+  if ((options.method == Method::Vincent || options.method == Method::Dnf) && filter_culls(cubic)) return Result{};
   const Problem p{kind, query, options, cubic};
   switch (options.method) {
     case Method::Cubic: return cubic_method(p);

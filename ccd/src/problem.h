@@ -71,7 +71,8 @@ bool apart_over(QueryKind kind, const Query& q, Scalar lo, Scalar hi, Scalar gap
 bool roots_apart(QueryKind kind, const Query& q, const CoplanarityCubic& cubic, Scalar gap, int depth);
 
 /// Tests only: the portable code even where the AVX2 kernels could run (run_batch's gather and
-/// compute_cubics, query_cubic's coplanarity_cubic); both must give the same bits.
+/// compute_cubics, query_cubic's coplanarity_cubic, apart_over's boxes); both must give the
+/// same bits and decisions.
 extern bool portable_kernels;
 
 /// coplanarity_cubic(kind, query) bit for bit, with AVX2 where the machine has it: the

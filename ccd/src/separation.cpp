@@ -1,6 +1,7 @@
 // The separation stage of the filter: where the coplanarity cubic does have roots in the step,
 // de Casteljau halving locates them in short sub-intervals, and a separating axis over each
 // shows the features apart there. ccd.md, "The separation stage".
+#include "avx2.h"
 #include "problem.h"
 
 namespace drape::ccd::detail {
@@ -51,7 +52,7 @@ bool apart_along(const Vec3 (&x)[4][2], int split, const Vec3& w, Scalar need) {
 // the compiler unrolls, so the coefficients stay in registers: the splits of one level are
 // independent of each other and run side by side (a loop over an array of levels cost twice).
 template <int DEPTH>
-std::uint64_t kept_leaves(const Bernstein3& b, Scalar margin) {
+__attribute__((always_inline)) inline std::uint64_t kept_leaves(const Bernstein3& b, Scalar margin) {
   if constexpr (DEPTH == 0) {
     return std::uint64_t(!certainly_nonzero(b, margin));
   } else {
@@ -61,6 +62,53 @@ std::uint64_t kept_leaves(const Bernstein3& b, Scalar margin) {
   }
 }
 
+// The features' boxes over [lo, hi] more than need apart along x, y or z, with need the gap
+// plus the rounding margin (returned in need). Portable and AVX2 versions, the same decisions:
+// the same interpolated coordinates (start + t * motion, no FMA), exact minima and maxima.
+bool boxes_apart(QueryKind kind, const Query& q, const Vec3 (&x)[4][2], Scalar gap, Scalar& need) {
+  const int split = kind == QueryKind::VertexFace ? 1 : 2;
+  need = gap + PROJECTION_ERROR_FACTOR * UNIT_ROUNDOFF * max_abs_coordinate(q);
+  for (int k = 0; k < 3; ++k) {
+    Scalar p[4][2];
+    for (int i = 0; i < 4; ++i) p[i][0] = x[i][0][k], p[i][1] = x[i][1][k];
+    if (ranges_apart(p, split, need)) return true;
+  }
+  return false;
+}
+
+// All three axes at once, a point's x, y, z in one register's lanes; one branch at the end
+// (which axis separates is random in a cloth step).
+__attribute__((target("avx2"))) bool boxes_apart_avx2(QueryKind kind, const Query& q, Scalar lo, Scalar hi,
+                                                      Scalar gap, Scalar& need) {
+  const int split = kind == QueryKind::VertexFace ? 1 : 2;
+  const __m256d at_lo = _mm256_set1_pd(lo), at_hi = _mm256_set1_pd(hi);
+  __m256d point_lo[4], point_hi[4], largest = _mm256_setzero_pd();
+  for (int i = 0; i < 4; ++i) {
+    const __m256d start = load_start(q, i), end = load_end(q, i);
+    const __m256d motion = _mm256_sub_pd(end, start);
+    const __m256d x0 = _mm256_add_pd(start, _mm256_mul_pd(at_lo, motion));
+    const __m256d x1 = _mm256_add_pd(start, _mm256_mul_pd(at_hi, motion));
+    point_lo[i] = min4(x0, x1);
+    point_hi[i] = max4(x0, x1);
+    largest = max4(largest, max4(abs4(start), abs4(end)));
+  }
+  // Point 0 is always the first feature's, point 3 the second's.
+  __m256d a_lo = point_lo[0], a_hi = point_hi[0], b_lo = point_lo[3], b_hi = point_hi[3];
+  for (int i = 1; i < 3; ++i) {
+    __m256d& lo_i = i < split ? a_lo : b_lo;
+    __m256d& hi_i = i < split ? a_hi : b_hi;
+    lo_i = min4(lo_i, point_lo[i]);
+    hi_i = max4(hi_i, point_hi[i]);
+  }
+  alignas(32) double lanes[4];
+  _mm256_store_pd(lanes, largest);
+  need = gap + PROJECTION_ERROR_FACTOR * UNIT_ROUNDOFF * std::max({lanes[0], lanes[1], lanes[2]});
+  const __m256d need4 = _mm256_set1_pd(need);
+  const __m256d apart = _mm256_or_pd(_mm256_cmp_pd(_mm256_sub_pd(b_lo, a_hi), need4, _CMP_GT_OQ),
+                                     _mm256_cmp_pd(_mm256_sub_pd(a_lo, b_hi), need4, _CMP_GT_OQ));
+  return (_mm256_movemask_pd(apart) & 0b111) != 0;
+}
+
 }  // namespace
 
 bool apart_over(QueryKind kind, const Query& q, Scalar lo, Scalar hi, Scalar gap) {
@@ -68,17 +116,21 @@ bool apart_over(QueryKind kind, const Query& q, Scalar lo, Scalar hi, Scalar gap
   hi = std::min(Scalar(1), hi + TIME_WIDENING);
   const int split = kind == QueryKind::VertexFace ? 1 : 2;  // the vertex, or edge_a, against the rest
   Vec3 x[4][2];
-  for (int i = 0; i < 4; ++i) {
-    const Vec3 motion = q.end[i] - q.start[i];
-    x[i][0] = q.start[i] + lo * motion;
-    x[i][1] = q.start[i] + hi * motion;
-  }
-  const Scalar need = gap + PROJECTION_ERROR_FACTOR * UNIT_ROUNDOFF * max_abs_coordinate(q);
+  const auto positions = [&] {
+    for (int i = 0; i < 4; ++i) {
+      const Vec3 motion = q.end[i] - q.start[i];
+      x[i][0] = q.start[i] + lo * motion;
+      x[i][1] = q.start[i] + hi * motion;
+    }
+  };
   // The coordinate axes first: the cheapest, and enough for most far crossings.
-  for (int k = 0; k < 3; ++k) {
-    Scalar p[4][2];
-    for (int i = 0; i < 4; ++i) p[i][0] = x[i][0][k], p[i][1] = x[i][1][k];
-    if (ranges_apart(p, split, need)) return true;
+  Scalar need = 0;
+  if (avx2_enabled()) {
+    if (boxes_apart_avx2(kind, q, lo, hi, gap, need)) return true;
+    positions();
+  } else {
+    positions();
+    if (boxes_apart(kind, q, x, gap, need)) return true;
   }
   // An axis from the features' shape at the interval's midpoint (any fixed axis is valid;
   // these separate the features where they are coplanar, which is where the cubic's roots are).

@@ -52,6 +52,33 @@ TEST(Separation, AnAxisGapHoldsAtEveryTimeOfTheInterval) {
   EXPECT_GT(near, 10'000u);
 }
 
+TEST(Separation, PortableAndAvx2AxisTestsDecideAlike) {
+  // The AVX2 coordinate-axis test (where this machine has AVX2) and the portable one, on the
+  // same queries and intervals, every family and scale: the same answers.
+  std::mt19937_64 rng(8);
+  std::uniform_real_distribution<Scalar> unit(0, 1);
+  std::size_t apart = 0, differences = 0, checked = 0;
+  for (QueryKind kind : {QueryKind::VertexFace, QueryKind::EdgeEdge})
+    for (QueryFamily family : ALL_FAMILIES)
+      for (Scalar scale : {1e-8, 1.0, 1e8}) {
+        for (const Query& q : generate_queries(family, kind, 1'000, 21 + int(family), scale)) {
+          Scalar lo = unit(rng), hi = unit(rng);
+          if (lo > hi) std::swap(lo, hi);
+          const Scalar gap = 0.05 * scale * unit(rng);
+          detail::portable_kernels = true;
+          const bool portable = detail::apart_over(kind, q, lo, hi, gap);
+          detail::portable_kernels = false;
+          const bool fast = detail::apart_over(kind, q, lo, hi, gap);
+          ++checked;
+          apart += portable;
+          differences += portable != fast;
+        }
+      }
+  EXPECT_EQ(differences, 0u) << "of " << checked;
+  EXPECT_GT(apart, checked / 10);
+  EXPECT_LT(apart, checked - checked / 10);
+}
+
 TEST(Separation, ATouchingIntervalIsNeverSeparated) {
   // Built contacts: at their contact time the features touch, so no interval around it is apart.
   std::size_t checked = 0;
