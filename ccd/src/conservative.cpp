@@ -274,6 +274,16 @@ Result conservative_search(const Problem& p, bool use_cubic) {
     apart.path = Path::Solved;
     return apart;
   }
+  // The search's first question, before the search is set up (most tests of a cloth step end
+  // here): the cubic, off by at most its error, stays farther from zero than the thickness lets
+  // it come over the whole step.
+  if (use_cubic &&
+      certainly_nonzero(p.cubic.b, p.cubic.error + thickness_to_cubic(p.kind, p.query, p.options.thickness))) {
+    Result culled;
+    culled.path = Path::Culled;
+    culled.root_solves = 1;  // one interval examined, as the search counts it
+    return culled;
+  }
   // Only the conservative method itself escalates to long double; the degenerate path of the
   // other methods (use_cubic = false) stays in double.
   const bool exact_contact = p.options.thickness == 0 && use_cubic;
