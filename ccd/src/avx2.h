@@ -14,7 +14,9 @@ namespace drape::ccd::detail {
 
 /// Whether this machine has AVX2, asked once at start-up. coplanarity.cpp.
 extern const bool cpu_has_avx2;
-/// Tests only: the portable code even where the AVX2 kernels could run. coplanarity.cpp.
+/// Tests only: the portable code even where the AVX2 kernels could run (run_batch's gather and
+/// compute_cubics, query_cubic's coplanarity_cubic, apart_over's boxes); both must give the
+/// same bits and decisions. coplanarity.cpp.
 extern bool portable_kernels;
 
 /// Whether the AVX2 kernels run (called per query: a load and a test).

@@ -80,9 +80,12 @@ __attribute__((target("avx2"))) CoplanarityCubic cubic_avx2(const Query& query) 
   const __m256d norms_c = lane_sums(abs4(C0), abs4(C1), zero, zero);
   const __m256d starts = _mm256_unpacklo_pd(norms, norms_c);  // |A0|, |C0|, |B0|, 0
   const __m256d ends = _mm256_unpackhi_pd(norms, norms_c);    // |A1|, |C1|, |B1|, 0
-  alignas(32) double larger[4];
-  _mm256_store_pd(larger, max4(starts, ends));
-  const Scalar a = larger[0], bb = larger[2], c = larger[1];
+  // Taken out of the register, not through memory (a store and narrower loads at other offsets
+  // are not forwarded on AMD Zen 4).
+  const __m256d larger = max4(starts, ends);
+  const __m128d larger_ac = _mm256_castpd256_pd128(larger);
+  const Scalar a = _mm_cvtsd_f64(larger_ac), c = _mm_cvtsd_f64(_mm_unpackhi_pd(larger_ac, larger_ac));
+  const Scalar bb = _mm_cvtsd_f64(_mm256_extractf128_pd(larger, 1));
   out.error = Scalar(COPLANARITY_ERROR_FACTOR) * UNIT_ROUNDOFF * a * bb * c;
   out.extent = std::max({a, bb, c});
   return out;
@@ -95,11 +98,8 @@ const bool cpu_has_avx2 = [] {
   return __builtin_cpu_supports("avx2") != 0;
 }();
 
-CoplanarityCubic query_cubic(QueryKind kind, const Query& query) {
-  if (avx2_enabled()) return kind == QueryKind::VertexFace ? cubic_avx2<QueryKind::VertexFace>(query)
-                                                       : cubic_avx2<QueryKind::EdgeEdge>(query);
-  return coplanarity_cubic(kind, query);
-}
+CoplanarityCubic vertex_face_cubic_avx2(const Query& query) { return cubic_avx2<QueryKind::VertexFace>(query); }
+CoplanarityCubic edge_edge_cubic_avx2(const Query& query) { return cubic_avx2<QueryKind::EdgeEdge>(query); }
 
 }  // namespace detail
 }  // namespace drape::ccd

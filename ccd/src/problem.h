@@ -7,6 +7,7 @@
 #include "drape/ccd/coplanarity.h"
 #include "drape/ccd/distance.h"
 #include "drape/ccd/query.h"
+#include "avx2.h"
 
 namespace drape::ccd::detail {
 
@@ -70,14 +71,18 @@ bool apart_over(QueryKind kind, const Query& q, Scalar lo, Scalar hi, Scalar gap
 /// false, and so does a run covering the whole step (the broad phase's boxes overlap there).
 bool roots_apart(QueryKind kind, const Query& q, const CoplanarityCubic& cubic, Scalar gap, int depth);
 
-/// Tests only: the portable code even where the AVX2 kernels could run (run_batch's gather and
-/// compute_cubics, query_cubic's coplanarity_cubic, apart_over's boxes); both must give the
-/// same bits and decisions.
-extern bool portable_kernels;
+/// coplanarity_cubic(kind, query) bit for bit, computed with AVX2 (only where
+/// avx2_enabled()). coplanarity.cpp.
+CoplanarityCubic vertex_face_cubic_avx2(const Query& query);
+CoplanarityCubic edge_edge_cubic_avx2(const Query& query);
 
 /// coplanarity_cubic(kind, query) bit for bit, with AVX2 where the machine has it: the
-/// one-query entry points start here. coplanarity.cpp.
-CoplanarityCubic query_cubic(QueryKind kind, const Query& query);
+/// one-query entry points start here.
+inline CoplanarityCubic query_cubic(QueryKind kind, const Query& query) {
+  if (avx2_enabled())
+    return kind == QueryKind::VertexFace ? vertex_face_cubic_avx2(query) : edge_edge_cubic_avx2(query);
+  return coplanarity_cubic(kind, query);
+}
 
 /// The conservative method, and the degenerate path of the others (use_cubic = false: the
 /// cubic says nothing, decide by distance alone).
