@@ -65,12 +65,16 @@ __attribute__((always_inline)) inline std::uint64_t kept_leaves(const Bernstein3
 // The features' boxes over [lo, hi] more than need apart along x, y or z, with need the gap
 // plus the rounding margin (returned in need). Portable and AVX2 versions, the same decisions:
 // the same interpolated coordinates (start + t * motion, no FMA), exact minima and maxima.
-bool boxes_apart(QueryKind kind, const Query& q, const Vec3 (&x)[4][2], Scalar gap, Scalar& need) {
+bool boxes_apart(QueryKind kind, const Query& q, Scalar lo, Scalar hi, Scalar gap, Scalar& need) {
   const int split = kind == QueryKind::VertexFace ? 1 : 2;
   need = gap + PROJECTION_ERROR_FACTOR * UNIT_ROUNDOFF * max_abs_coordinate(q);
   for (int k = 0; k < 3; ++k) {
     Scalar p[4][2];
-    for (int i = 0; i < 4; ++i) p[i][0] = x[i][0][k], p[i][1] = x[i][1][k];
+    for (int i = 0; i < 4; ++i) {
+      const Scalar start = q.start[i][k], motion = q.end[i][k] - start;
+      p[i][0] = start + lo * motion;
+      p[i][1] = start + hi * motion;
+    }
     if (ranges_apart(p, split, need)) return true;
   }
   return false;
@@ -109,28 +113,15 @@ __attribute__((target("avx2"))) bool boxes_apart_avx2(QueryKind kind, const Quer
   return (_mm256_movemask_pd(apart) & 0b111) != 0;
 }
 
-}  // namespace
-
-bool apart_over(QueryKind kind, const Query& q, Scalar lo, Scalar hi, Scalar gap) {
-  lo = std::max(Scalar(0), lo - TIME_WIDENING);
-  hi = std::min(Scalar(1), hi + TIME_WIDENING);
+// The axes from the features' shape, after the coordinate axes failed (a few percent of the
+// calls): out of line, so that the common path inlines into roots_apart.
+__attribute__((noinline)) bool shape_axes_apart(QueryKind kind, const Query& q, Scalar lo, Scalar hi, Scalar need) {
   const int split = kind == QueryKind::VertexFace ? 1 : 2;  // the vertex, or edge_a, against the rest
   Vec3 x[4][2];
-  const auto positions = [&] {
-    for (int i = 0; i < 4; ++i) {
-      const Vec3 motion = q.end[i] - q.start[i];
-      x[i][0] = q.start[i] + lo * motion;
-      x[i][1] = q.start[i] + hi * motion;
-    }
-  };
-  // The coordinate axes first: the cheapest, and enough for most far crossings.
-  Scalar need = 0;
-  if (avx2_enabled()) {
-    if (boxes_apart_avx2(kind, q, lo, hi, gap, need)) return true;
-    positions();
-  } else {
-    positions();
-    if (boxes_apart(kind, q, x, gap, need)) return true;
+  for (int i = 0; i < 4; ++i) {
+    const Vec3 motion = q.end[i] - q.start[i];
+    x[i][0] = q.start[i] + lo * motion;
+    x[i][1] = q.start[i] + hi * motion;
   }
   // An axis from the features' shape at the interval's midpoint (any fixed axis is valid;
   // these separate the features where they are coplanar, which is where the cubic's roots are).
@@ -162,6 +153,22 @@ bool apart_over(QueryKind kind, const Query& q, Scalar lo, Scalar hi, Scalar gap
   return apart_along(x, split, n.cross(b), need) || apart_along(x, split, n.cross(a), need);
 }
 
+inline bool apart_over_inline(QueryKind kind, const Query& q, Scalar lo, Scalar hi, Scalar gap) {
+  lo = std::max(Scalar(0), lo - TIME_WIDENING);
+  hi = std::min(Scalar(1), hi + TIME_WIDENING);
+  // The coordinate axes first: the cheapest, and enough for most far crossings.
+  Scalar need = 0;
+  if (avx2_enabled() ? boxes_apart_avx2(kind, q, lo, hi, gap, need) : boxes_apart(kind, q, lo, hi, gap, need))
+    return true;
+  return shape_axes_apart(kind, q, lo, hi, need);
+}
+
+}  // namespace
+
+bool apart_over(QueryKind kind, const Query& q, Scalar lo, Scalar hi, Scalar gap) {
+  return apart_over_inline(kind, q, lo, hi, gap);
+}
+
 bool roots_apart(QueryKind kind, const Query& q, const CoplanarityCubic& cubic, Scalar gap, int depth) {
   if (depth <= 0) return false;
   depth = std::min(depth, MAX_SEPARATION_DEPTH);
@@ -190,7 +197,7 @@ bool roots_apart(QueryKind kind, const Query& q, const CoplanarityCubic& cubic, 
     const int first = __builtin_ctzll(kept);
     const int past = first + __builtin_ctzll(~(kept >> first));  // the first dropped one after the run
     if (++runs > 3) return false;
-    if (!apart_over(kind, q, first * width, past * width, gap)) return false;
+    if (!apart_over_inline(kind, q, first * width, past * width, gap)) return false;
     kept &= past >= 64 ? 0 : (~std::uint64_t(0) << past);
   }
   return true;
