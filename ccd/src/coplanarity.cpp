@@ -44,6 +44,17 @@ DRAPE_AVX2 __m256d lane_sums(__m256d p0, __m256d p1, __m256d p2, __m256d p3) {
 }
 
 
+// std::max(|s|_1, |e|_1) for points s, e with x, y, z in lanes 0-2: the absolute values with
+// lane 3 cleared, so that a horizontal add gives |x| + |y| and |z| + 0 = |z|, then their sum;
+// the larger by maxsd with the operands swapped (see max4).
+DRAPE_AVX2 Scalar larger_norm(__m256d s, __m256d e) {
+  const __m256d abs_xyz = _mm256_castsi256_pd(_mm256_set_epi64x(0, 0x7fffffffffffffff, 0x7fffffffffffffff,
+                                                                 0x7fffffffffffffff));
+  const __m256d h = _mm256_hadd_pd(_mm256_and_pd(s, abs_xyz), _mm256_and_pd(e, abs_xyz));
+  const __m128d n = _mm_add_pd(_mm256_castpd256_pd128(h), _mm256_extractf128_pd(h, 1));  // |s|_1, |e|_1
+  return _mm_cvtsd_f64(_mm_max_sd(_mm_unpackhi_pd(n, n), n));
+}
+
 template <QueryKind kind>
 __attribute__((target("avx2"))) CoplanarityCubic cubic_avx2(const Query& query) {
   constexpr std::array<int, 4> order = coplanarity_order(kind);
@@ -75,17 +86,7 @@ __attribute__((target("avx2"))) CoplanarityCubic cubic_avx2(const Query& query) 
   _mm_storeu_pd(out.b.data(), _mm256_castpd256_pd128(b));
   _mm_storeu_pd(out.b.data() + 2, _mm256_extractf128_pd(b, 1));
   // 1-norms of A0, A1, B0, B1 and C0, C1; a, b, c the larger of each pair.
-  const __m256d norms = lane_sums(abs4(A0), abs4(A1), abs4(B0), abs4(B1));
-  const __m256d zero = _mm256_setzero_pd();
-  const __m256d norms_c = lane_sums(abs4(C0), abs4(C1), zero, zero);
-  const __m256d starts = _mm256_unpacklo_pd(norms, norms_c);  // |A0|, |C0|, |B0|, 0
-  const __m256d ends = _mm256_unpackhi_pd(norms, norms_c);    // |A1|, |C1|, |B1|, 0
-  // Taken out of the register, not through memory (a store and narrower loads at other offsets
-  // are not forwarded on AMD Zen 4).
-  const __m256d larger = max4(starts, ends);
-  const __m128d larger_ac = _mm256_castpd256_pd128(larger);
-  const Scalar a = _mm_cvtsd_f64(larger_ac), c = _mm_cvtsd_f64(_mm_unpackhi_pd(larger_ac, larger_ac));
-  const Scalar bb = _mm_cvtsd_f64(_mm256_extractf128_pd(larger, 1));
+  const Scalar a = larger_norm(A0, A1), bb = larger_norm(B0, B1), c = larger_norm(C0, C1);
   out.error = Scalar(COPLANARITY_ERROR_FACTOR) * UNIT_ROUNDOFF * a * bb * c;
   out.extent = std::max({a, bb, c});
   return out;
