@@ -287,11 +287,14 @@ Result conservative_search(const Problem& p, bool use_cubic) {
   // Only the conservative method itself escalates to long double; the degenerate path of the
   // other methods (use_cubic = false) stays in double.
   const bool exact_contact = p.options.thickness == 0 && use_cubic;
-  // The filter's separation stage: an exact contact is an exact root of the cubic, which
-  // roots_apart keeps in its sub-intervals (its margin is twice the coefficients' error), and
-  // there the features are apart by more than the rounding of the positions.
-  if (exact_contact && !cubic_poorly_resolved(p.cubic) && !certainly_nonzero(p.cubic.b, p.cubic.error) &&
-      roots_apart(p.kind, p.query, p.cubic, 0.0, p.options.separation_depth)) {
+  // The filter's separation stage. A contact is a time where the features are at most the
+  // thickness apart, so where |d| <= thickness |e1| |e2| (thickness_to_cubic; d = 0 for exact
+  // contact). roots_apart keeps every sub-interval where the cubic, off by at most twice its
+  // error, may come that close to zero, and shows the features farther apart than the
+  // thickness (plus the rounding of the positions) over each.
+  if (use_cubic && !cubic_poorly_resolved(p.cubic) &&
+      roots_apart(p.kind, p.query, p.cubic, p.options.thickness, p.options.separation_depth,
+                  thickness_to_cubic(p.kind, p.query, p.options.thickness))) {
     Result apart;
     apart.path = Path::Separated;
     return apart;

@@ -69,7 +69,11 @@ bool apart_over(QueryKind kind, const Query& q, Scalar lo, Scalar hi, Scalar gap
 /// three) must be apart (apart_over). True when they all are: at every root of the cubic in the
 /// step, computed or exact, the features are more than gap apart. depth 0 (or less) returns
 /// false, and so does a run covering the whole step (the broad phase's boxes overlap there).
-bool roots_apart(QueryKind kind, const Query& q, const CoplanarityCubic& cubic, Scalar gap, int depth);
+/// With cubic_margin > 0 a sub-interval is dropped only where |cubic| certainly exceeds it too:
+/// then the features are more than gap apart wherever |cubic| may be at most cubic_margin
+/// (conservative with a thickness: cubic_margin = thickness |e1| |e2|, gap = thickness).
+bool roots_apart(QueryKind kind, const Query& q, const CoplanarityCubic& cubic, Scalar gap, int depth,
+                 Scalar cubic_margin = 0);
 
 /// coplanarity_cubic(kind, query) bit for bit, computed with AVX2 (only where
 /// avx2_enabled()). coplanarity.cpp.

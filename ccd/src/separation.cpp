@@ -169,14 +169,15 @@ bool apart_over(QueryKind kind, const Query& q, Scalar lo, Scalar hi, Scalar gap
   return apart_over_inline(kind, q, lo, hi, gap);
 }
 
-bool roots_apart(QueryKind kind, const Query& q, const CoplanarityCubic& cubic, Scalar gap, int depth) {
+bool roots_apart(QueryKind kind, const Query& q, const CoplanarityCubic& cubic, Scalar gap, int depth,
+                 Scalar cubic_margin) {
   if (depth <= 0) return false;
   depth = std::min(depth, MAX_SEPARATION_DEPTH);
   // A sub-interval holds no root of the exact or the computed cubic, and no sign change of a
   // root finder's evaluation of it, when its coefficients exceed this in one sign: twice the
   // coefficients' error, and the rounding of the halving and of an evaluation in the power
   // basis (Horner). So every root any method could find lies in a kept sub-interval.
-  const Scalar margin = 2 * cubic.error + 256 * UNIT_ROUNDOFF * max_abs(cubic.b);
+  const Scalar margin = 2 * cubic.error + 256 * UNIT_ROUNDOFF * max_abs(cubic.b) + cubic_margin;
   std::uint64_t kept = 0;
   switch (depth) {
     case 1: kept = kept_leaves<1>(cubic.b, margin); break;

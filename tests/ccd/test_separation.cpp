@@ -151,25 +151,36 @@ TEST(Separation, ChangesNoAnswerOfVincent) {
 }
 
 TEST(Separation, ConservativeKeepsEveryBuiltContact) {
-  // The families built to touch: the conservative method finds the same contacts with the
-  // stage as without it (the exact references of test_exact_extremes run with it too).
-  for (QueryKind kind : {QueryKind::VertexFace, QueryKind::EdgeEdge}) {
-    for (QueryFamily family : {QueryFamily::Contact, QueryFamily::TouchAtStart, QueryFamily::TouchAtEnd,
-                               QueryFamily::FarFromOrigin, QueryFamily::TinyMotion}) {
-      const auto queries = generate_queries(family, kind, 5'000, 77 + int(family));
-      Options with, without;
-      with.method = without.method = Method::Conservative;
-      without.separation_depth = 0;
-      std::size_t hits = 0;
-      for (std::size_t i = 0; i < queries.size(); ++i) {
-        const Result b = elementary_ccd(kind, queries[i], without);
-        hits += b.hit;
-        if (b.hit) {
-          EXPECT_TRUE(elementary_ccd(kind, queries[i], with).hit)
-              << kind_name(kind) << " " << family_name(family) << " #" << i;
+  // The families built to touch, at zero thickness and with a thickness (where the stage must
+  // also keep times the features come within the thickness without being coplanar): the
+  // conservative method finds the same contacts with the stage as without it (the exact
+  // references of test_exact_extremes run with it too).
+  for (const Scalar thickness : {0.0, 0.02}) {
+    std::size_t separated = 0;
+    for (QueryKind kind : {QueryKind::VertexFace, QueryKind::EdgeEdge}) {
+      for (QueryFamily family : {QueryFamily::Contact, QueryFamily::TouchAtStart, QueryFamily::TouchAtEnd,
+                                 QueryFamily::FarFromOrigin, QueryFamily::TinyMotion, QueryFamily::Random}) {
+        const auto queries = generate_queries(family, kind, 5'000, 77 + int(family));
+        Options with, without;
+        with.method = without.method = Method::Conservative;
+        with.thickness = without.thickness = thickness;
+        without.separation_depth = 0;
+        std::size_t hits = 0;
+        for (std::size_t i = 0; i < queries.size(); ++i) {
+          const Result b = elementary_ccd(kind, queries[i], without);
+          const Result a = elementary_ccd(kind, queries[i], with);
+          hits += b.hit;
+          separated += a.path == Path::Separated;
+          if (b.hit) {
+            EXPECT_TRUE(a.hit) << kind_name(kind) << " " << family_name(family) << " #" << i << " thickness "
+                               << thickness;
+          }
+        }
+        if (family != QueryFamily::Random) {
+          EXPECT_GT(hits, 0u) << kind_name(kind) << " " << family_name(family);
         }
       }
-      EXPECT_GT(hits, 0u) << kind_name(kind) << " " << family_name(family);
     }
+    EXPECT_GT(separated, 1'000u) << "thickness " << thickness;  // the stage does decide tests here
   }
 }
