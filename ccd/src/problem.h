@@ -62,6 +62,11 @@ inline Scalar max_abs_coordinate(const Query& q) {
 /// coordinate. separation.cpp.
 bool apart_over(QueryKind kind, const Query& q, Scalar lo, Scalar hi, Scalar gap);
 
+/// The tree of halvings below b, depth levels deep (clamped to 1..6): bit i set when the
+/// coefficients of sub-interval i (left to right, de Casteljau split_half at each level) are not
+/// all beyond margin in one sign (certainly_nonzero fails). separation.cpp.
+std::uint64_t kept_sub_intervals(const Bernstein3& b, Scalar margin, int depth);
+
 /// The filter's separation stage: the step is halved depth times (de Casteljau, 2^depth
 /// sub-intervals, depth at most 6); a sub-interval is dropped when the cubic certainly has no
 /// root on it (its coefficients exceed twice their error bound and the rounding of any root

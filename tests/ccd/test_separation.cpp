@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <filesystem>
+#include <limits>
 #include <random>
 
 #include "drape/ccd/query_file.h"
@@ -77,6 +78,34 @@ TEST(Separation, PortableAndAvx2AxisTestsDecideAlike) {
   EXPECT_EQ(differences, 0u) << "of " << checked;
   EXPECT_GT(apart, checked / 10);
   EXPECT_LT(apart, checked - checked / 10);
+}
+
+TEST(Separation, TreeOfHalvingsMatchesPlainSubdivision) {
+  // kept_sub_intervals (two subtrees side by side in SSE2 lanes) against each leaf computed by
+  // repeated split_half and tested with certainly_nonzero: the same mask, at every depth.
+  std::mt19937_64 rng(9);
+  std::uniform_real_distribution<Scalar> coefficient(-1, 1), scale(0, 0.3);
+  std::size_t mixed = 0;
+  for (int trial = 0; trial < 20'000; ++trial) {
+    Bernstein3 b{coefficient(rng), coefficient(rng), coefficient(rng), coefficient(rng)};
+    if (trial % 7 == 0) b[trial % 4] = std::numeric_limits<Scalar>::quiet_NaN();
+    const Scalar margin = scale(rng) * scale(rng);
+    for (int depth = 1; depth <= 6; ++depth) {
+      std::uint64_t expected = 0;
+      for (int leaf = 0; leaf < (1 << depth); ++leaf) {
+        Bernstein3 c = b, left, right;
+        for (int level = depth - 1; level >= 0; --level) {
+          split_half(c, left, right);
+          c = (leaf >> level) & 1 ? right : left;
+        }
+        expected |= std::uint64_t(!certainly_nonzero(c, margin)) << leaf;
+      }
+      ASSERT_EQ(detail::kept_sub_intervals(b, margin, depth), expected) << "trial " << trial << " depth " << depth;
+      const std::uint64_t all = depth == 6 ? ~std::uint64_t(0) : (std::uint64_t(1) << (1 << depth)) - 1;
+      mixed += expected != 0 && expected != all;
+    }
+  }
+  EXPECT_GT(mixed, 10'000u);  // masks with kept and dropped leaves both occur
 }
 
 TEST(Separation, ATouchingIntervalIsNeverSeparated) {
