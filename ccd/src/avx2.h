@@ -12,11 +12,11 @@
 
 namespace drape::ccd::detail {
 
-/// Whether this machine has AVX2, asked once at start-up. coplanarity.cpp.
+/// Whether this machine has AVX2, asked once at start-up. avx2.cpp.
 extern const bool cpu_has_avx2;
 /// Tests only: the portable code even where the AVX2 kernels could run (run_batch's gather and
 /// compute_cubics, query_cubic's coplanarity_cubic, apart_over's boxes); both must give the
-/// same bits and decisions. coplanarity.cpp.
+/// same bits and decisions. avx2.cpp.
 extern bool portable_kernels;
 
 /// Whether the AVX2 kernels run (called per query: a load and a test).
@@ -37,6 +37,8 @@ DRAPE_AVX2 __m256d load_point(const Vec3& p) {
 
 /// (x, y, z, whatever follows p) in one load: only for a point followed by another double of
 /// the same object, where the kernel ignores lane 3.
+static_assert(sizeof(Vec3) == 3 * sizeof(double) && sizeof(Query) == 8 * sizeof(Vec3),
+              "load_start and load_end read a query's points as 8 consecutive packed Vec3");
 DRAPE_AVX2 __m256d load_point_followed(const Vec3& p) { return _mm256_loadu_pd(p.data()); }
 
 /// Point i of a query at the start or the end of the step, for kernels that ignore lane 3: the

@@ -237,7 +237,6 @@ __attribute__((target("avx2"))) void gather_cubics_avx2(const BatchInput& input,
   }
 }
 
-
 // The tests [begin, end) of one kind: cubics a chunk at a time; dnf and vincent decide the
 // culled ones from the cubic alone, everything else runs the full method on the gathered query.
 // Appends the hits to hits and returns the counters of the range.

@@ -31,6 +31,9 @@ constexpr Scalar WINDOW_ROOT_FRACTION = 1e-3;
 constexpr int EXTENDED_EXTRA_LEVELS = 34;
 constexpr int EXTENDED_MAX_INTERVALS = 256;
 // A nearly coplanar motion's search in double, before the long-double one: its interval budget.
+// The Erleben near misses (coplanar, 1e-11 to 1e-4 apart) take 100 to 200; a motion double
+// cannot decide stops at its first undecided interval, or at worst after 512, before the
+// long-double search.
 constexpr int COPLANAR_DOUBLE_INTERVALS = 512;
 constexpr int STACK_SIZE = 160;  // depth-first: at most one pending sibling per level
 
@@ -77,6 +80,21 @@ void split_at(const Coefficients<T>& b, T s, Coefficients<T>& left, Coefficients
   right = {mid, b123, b23, b[3]};
 }
 
+// What a search in double does with an interval it cannot decide.
+enum class Escalation {
+  None,          // a contact at its start (long double, or a thickness: nothing finer to try)
+  Interval,      // search that interval again in long double: a contact unless it is cleared
+  RestOfStep,    // from its start, search the rest of the step in long double, which decides;
+                 // the same when the budget runs out
+};
+
+// Extent of a long-double search.
+enum class ExtendedSpan {
+  Undecided,   // below an interval double precision left undecided: a fine time tolerance and
+               // a small budget
+  RestOfStep,  // [lo, 1] with the options' tolerance and budget
+};
+
 // What one search needs, in its precision.
 template <class T>
 struct Setup {
@@ -88,9 +106,7 @@ struct Setup {
   T level_error;      // rounding added by one subdivision level
   T time_tolerance;
   int max_intervals;
-  bool refine_in_extended;  // double search: re-examine undecided intervals in long double
-  bool rest_in_extended;    // double search: at the first undecided interval or when out of
-                            // budget, search the rest of the step in long double instead
+  Escalation escalation;
 };
 
 template <class T>
@@ -105,8 +121,7 @@ Setup<T> make_setup(const Problem& p, bool use_cubic, const Coefficients<T>& b, 
                   T(SUBDIVISION_ERROR_FACTOR) * u * max_abs(b),
                   T(o.time_tolerance),
                   o.max_intervals,
-                  false,
-                  false};
+                  Escalation::None};
 }
 
 template <class T>
@@ -126,10 +141,8 @@ struct Outcome {
   int examined = 0;
 };
 
-// Whether [lo, hi] certainly holds no exact contact, searched in long double: below an
-// interval double precision left undecided (a fine time tolerance and a small budget), or, with
-// rest_of_step, over [lo, 1] with the options' tolerance and budget.
-Outcome<Extended> extended_search(const Problem& p, bool use_cubic, Scalar lo, Scalar hi, bool rest_of_step = false);
+// Whether [lo, hi] certainly holds no exact contact, searched in long double.
+Outcome<Extended> extended_search(const Problem& p, bool use_cubic, Scalar lo, Scalar hi, ExtendedSpan span);
 
 template <class T>
 Outcome<T> search(const Setup<T>& setup, Interval<T> first) {
@@ -141,7 +154,7 @@ Outcome<T> search(const Setup<T>& setup, Interval<T> first) {
 
   // The rest of the step from lo, searched in long double, decides.
   const auto rest_in_extended = [&](T lo) {
-    const auto fine = extended_search(p, setup.use_cubic, Scalar(lo), 1.0, /*rest_of_step=*/true);
+    const auto fine = extended_search(p, setup.use_cubic, Scalar(lo), 1.0, ExtendedSpan::RestOfStep);
     out.examined += fine.examined;
     out.hit = fine.hit;
     out.toc = T(fine.toc);
@@ -149,14 +162,14 @@ Outcome<T> search(const Setup<T>& setup, Interval<T> first) {
     out.budget_spent = fine.budget_spent;
   };
 
-  // An undecided interval: a contact, unless the extended search clears it.
+  // An undecided interval: a contact (true: the search ends), unless its escalation clears it.
   const auto undecided = [&](const Interval<T>& I, T toc, Vec2 params) {
-    if (setup.rest_in_extended) {
+    if (setup.escalation == Escalation::RestOfStep) {
       rest_in_extended(I.lo);
       return true;
     }
-    if (setup.refine_in_extended) {
-      const auto fine = extended_search(p, setup.use_cubic, Scalar(I.lo), Scalar(I.hi));
+    if (setup.escalation == Escalation::Interval) {
+      const auto fine = extended_search(p, setup.use_cubic, Scalar(I.lo), Scalar(I.hi), ExtendedSpan::Undecided);
       out.examined += fine.examined;
       if (!fine.hit) return false;
       out.budget_spent = fine.budget_spent;
@@ -209,7 +222,7 @@ Outcome<T> search(const Setup<T>& setup, Interval<T> first) {
     const auto prox = proximity_at<T>(p.kind, p.query, mid);
     if (prox.distance - prox.error - setup.distance_margin > width / 2 * setup.speed) continue;
     if (out.examined >= setup.max_intervals || top + 2 > STACK_SIZE) {
-      if (setup.rest_in_extended) {
+      if (setup.escalation == Escalation::RestOfStep) {
         rest_in_extended(I.lo);
         break;
       }
@@ -232,7 +245,7 @@ Outcome<T> search(const Setup<T>& setup, Interval<T> first) {
   return out;
 }
 
-Outcome<Extended> extended_search(const Problem& p, bool use_cubic, Scalar lo, Scalar hi, bool rest_of_step) {
+Outcome<Extended> extended_search(const Problem& p, bool use_cubic, Scalar lo, Scalar hi, ExtendedSpan span) {
   using T = Extended;
   const auto cubic = coplanarity_cubic_in<T>(p.kind, p.query);
   // The coefficients on [lo, hi]: two splits, at lo and then at hi within [lo, 1].
@@ -241,7 +254,7 @@ Outcome<Extended> extended_search(const Problem& p, bool use_cubic, Scalar lo, S
   Coefficients<T> on_interval = right;
   if (hi < 1) split_at<T>(right, (T(hi) - T(lo)) / (1 - T(lo)), on_interval, left);
   Setup<T> setup = make_setup<T>(p, use_cubic, cubic.b, cubic.error);
-  if ((lo > 0 || hi < 1) && !rest_of_step) {
+  if ((lo > 0 || hi < 1) && span == ExtendedSpan::Undecided) {
     // Below an interval double precision left undecided.
     setup.time_tolerance = (T(hi) - T(lo)) * std::ldexp(T(1), -EXTENDED_EXTRA_LEVELS);
     setup.max_intervals = EXTENDED_MAX_INTERVALS;
@@ -314,12 +327,12 @@ Result conservative_search(const Problem& p, bool use_cubic) {
     } else {
       Setup<Scalar> setup = make_setup<Scalar>(p, use_cubic, p.cubic.b, p.cubic.error);
       setup.max_intervals = std::min(setup.max_intervals, COPLANAR_DOUBLE_INTERVALS);
-      setup.rest_in_extended = true;
+      setup.escalation = Escalation::RestOfStep;
       out = search<Scalar>(setup, Interval<Scalar>{0.0, 1.0, p.cubic.b, 0});
     }
   } else {
     Setup<Scalar> setup = make_setup<Scalar>(p, use_cubic, p.cubic.b, p.cubic.error);
-    setup.refine_in_extended = exact_contact;
+    setup.escalation = exact_contact ? Escalation::Interval : Escalation::None;
     out = search<Scalar>(setup, Interval<Scalar>{0.0, 1.0, p.cubic.b, 0});
   }
   Result result;

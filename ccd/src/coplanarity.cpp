@@ -17,15 +17,14 @@ Power3 coplanarity_power(QueryKind kind, const Query& query) {
 
 namespace detail {
 
-bool portable_kernels = false;
-
 namespace {
 
 // coplanarity_cubic_in<double> for one query with AVX2: a point's x, y, z in lanes 0-2 of one
 // register (lane 3 is never summed), the cross products by lane permutations, the eight triple
-// products and six 1-norms summed across lanes after a 4x4 transpose. Every rounded operation
-// is the scalar code's, on the same operands in the same order (no FMA; x + (-0) = x where a
-// lane must pass a value through), so the bits are the same. About a third of its instructions.
+// products summed across lanes after a 4x4 transpose, the six 1-norms by horizontal adds. Every
+// rounded operation is the scalar code's, on the same operands in the same order (no FMA;
+// x + (-0) = x where a lane must pass a value through), so the bits are the same. About a
+// third of its instructions.
 
 // (u1, u2, u0) and (u2, u0, u1): u x v = yzx(u) zxy(v) - zxy(u) yzx(v), lane by lane.
 DRAPE_AVX2 __m256d yzx(__m256d u) { return _mm256_permute4x64_pd(u, _MM_SHUFFLE(3, 0, 2, 1)); }
@@ -42,7 +41,6 @@ DRAPE_AVX2 __m256d lane_sums(__m256d p0, __m256d p1, __m256d p2, __m256d p3) {
   const __m256d z = _mm256_permute2f128_pd(t0, t2, 0x31);
   return _mm256_add_pd(_mm256_add_pd(x, y), z);
 }
-
 
 // std::max(|s|_1, |e|_1) for points s, e with x, y, z in lanes 0-2: the absolute values with
 // lane 3 cleared, so that a horizontal add gives |x| + |y| and |z| + 0 = |z|, then their sum;
@@ -81,8 +79,7 @@ __attribute__((target("avx2"))) CoplanarityCubic cubic_avx2(const Query& query) 
   const __m256d b = _mm256_div_pd(_mm256_add_pd(_mm256_add_pd(first, second), third), _mm256_set_pd(1, 3, 3, 1));
   CoplanarityCubic out;
   // Two 128-bit stores: the caller copies the result 16 bytes at a time, and a 16-byte load
-  // from the upper half of one 32-byte store is not forwarded (a stall of about 10 ns on AMD
-  // Zen 4, half the cost of a culled query).
+  // from the upper half of one 32-byte store may not be forwarded from it.
   _mm_storeu_pd(out.b.data(), _mm256_castpd256_pd128(b));
   _mm_storeu_pd(out.b.data() + 2, _mm256_extractf128_pd(b, 1));
   // 1-norms of A0, A1, B0, B1 and C0, C1; a, b, c the larger of each pair.
@@ -94,10 +91,6 @@ __attribute__((target("avx2"))) CoplanarityCubic cubic_avx2(const Query& query) 
 
 }  // namespace
 
-const bool cpu_has_avx2 = [] {
-  __builtin_cpu_init();  // needed when this runs before main, as static initialisation does
-  return __builtin_cpu_supports("avx2") != 0;
-}();
 
 CoplanarityCubic vertex_face_cubic_avx2(const Query& query) { return cubic_avx2<QueryKind::VertexFace>(query); }
 CoplanarityCubic edge_edge_cubic_avx2(const Query& query) { return cubic_avx2<QueryKind::EdgeEdge>(query); }

@@ -89,8 +89,8 @@ Result cubic_method(const Problem& p) {
 
 Result dnf_method(const Problem& p) {
   // Unreliable roots first, as cubic does: the filter must not cull what cubic would find.
+  // (The sign cull of a resolved cubic came first, in run.)
   if (cubic_poorly_resolved(p.cubic)) return degenerate_path(p);
-  if (signs_cull(p.cubic)) return Result{};  // resolved: checked just above
   return cubic_method(p);
 }
 
@@ -172,8 +172,8 @@ Result vincent_method(const Problem& p) {
 }
 
 Result run(QueryKind kind, const Query& query, const Options& options, const CoplanarityCubic& cubic) {
-  // The filter's cull first, as dnf_method and vincent_method begin: most tests of a cloth step
-  // end here, before anything else is set up.
+  // The filter's cull (dnf and vincent) first: most tests of a cloth step end here, before
+  // anything else is set up.
   if ((options.method == Method::Vincent || options.method == Method::Dnf) && filter_culls(cubic)) return Result{};
   const Problem p{kind, query, options, cubic};
   switch (options.method) {

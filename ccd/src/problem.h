@@ -62,6 +62,11 @@ inline Scalar max_abs_coordinate(const Query& q) {
 /// coordinate. separation.cpp.
 bool apart_over(QueryKind kind, const Query& q, Scalar lo, Scalar hi, Scalar gap);
 
+/// apart_over's first part, the coordinate axes over exactly [lo, hi]; need receives the gap
+/// plus the rounding margin. AVX2 where avx2_enabled(), else portable: the same answers and
+/// need for finite coordinates. separation.cpp.
+bool coordinate_axes_apart(QueryKind kind, const Query& q, Scalar lo, Scalar hi, Scalar gap, Scalar& need);
+
 /// The tree of halvings below b, depth levels deep (clamped to 1..6): bit i set when the
 /// coefficients of sub-interval i (left to right, de Casteljau split_half at each level) are not
 /// all beyond margin in one sign (certainly_nonzero fails). separation.cpp.
@@ -80,8 +85,8 @@ std::uint64_t kept_sub_intervals(const Bernstein3& b, Scalar margin, int depth);
 bool roots_apart(QueryKind kind, const Query& q, const CoplanarityCubic& cubic, Scalar gap, int depth,
                  Scalar cubic_margin = 0);
 
-/// coplanarity_cubic(kind, query) bit for bit, computed with AVX2 (only where
-/// avx2_enabled()). coplanarity.cpp.
+/// coplanarity_cubic(kind, query) bit for bit, computed with AVX2: only where cpu_has_avx2
+/// (elsewhere an illegal instruction). coplanarity.cpp.
 CoplanarityCubic vertex_face_cubic_avx2(const Query& query);
 CoplanarityCubic edge_edge_cubic_avx2(const Query& query);
 

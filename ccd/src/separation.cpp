@@ -24,7 +24,8 @@ constexpr Scalar TIME_WIDENING = 0x1p-30;
 constexpr int MAX_SEPARATION_DEPTH = 6;
 
 // Whether the projections p of points [0, split) and [split, 4), at the two times, form ranges
-// farther apart than need. False when anything is NaN (comparisons with NaN are false).
+// farther apart than need. For finite coordinates: roots_apart keeps every sub-interval of a
+// cubic computed from a non-finite one, so none reaches here from the filter.
 bool ranges_apart(const Scalar (&p)[4][2], int split, Scalar need) {
   Scalar a_lo = std::numeric_limits<Scalar>::infinity(), a_hi = -a_lo, b_lo = a_lo, b_hi = -a_lo;
   for (int i = 0; i < 4; ++i) {
@@ -51,8 +52,6 @@ bool apart_along(const Vec3 (&x)[4][2], int split, const Vec3& w, Scalar need) {
 // hold a root, that is when its coefficients are not certainly nonzero. Written as a recursion
 // the compiler unrolls, so the coefficients stay in registers: the splits of one level are
 // independent of each other and run side by side (a loop over an array of levels cost twice).
-// (Two subtrees side by side in the lanes of SSE2 registers saved 1 % of the instructions of a
-// test the sign cull leaves: not kept.)
 template <int DEPTH>
 __attribute__((always_inline)) inline std::uint64_t kept_leaves(const Bernstein3& b, Scalar margin) {
   if constexpr (DEPTH == 0) {
@@ -155,13 +154,17 @@ __attribute__((noinline)) bool shape_axes_apart(QueryKind kind, const Query& q, 
   return apart_along(x, split, n.cross(b), need) || apart_along(x, split, n.cross(a), need);
 }
 
+inline bool coordinate_axes_apart_inline(QueryKind kind, const Query& q, Scalar lo, Scalar hi, Scalar gap,
+                                         Scalar& need) {
+  return avx2_enabled() ? boxes_apart_avx2(kind, q, lo, hi, gap, need) : boxes_apart(kind, q, lo, hi, gap, need);
+}
+
 inline bool apart_over_inline(QueryKind kind, const Query& q, Scalar lo, Scalar hi, Scalar gap) {
   lo = std::max(Scalar(0), lo - TIME_WIDENING);
   hi = std::min(Scalar(1), hi + TIME_WIDENING);
   // The coordinate axes first: the cheapest, and enough for most far crossings.
   Scalar need = 0;
-  if (avx2_enabled() ? boxes_apart_avx2(kind, q, lo, hi, gap, need) : boxes_apart(kind, q, lo, hi, gap, need))
-    return true;
+  if (coordinate_axes_apart_inline(kind, q, lo, hi, gap, need)) return true;
   return shape_axes_apart(kind, q, lo, hi, need);
 }
 
@@ -180,6 +183,10 @@ __attribute__((always_inline)) inline std::uint64_t kept_at_depth(const Bernstei
 
 bool apart_over(QueryKind kind, const Query& q, Scalar lo, Scalar hi, Scalar gap) {
   return apart_over_inline(kind, q, lo, hi, gap);
+}
+
+bool coordinate_axes_apart(QueryKind kind, const Query& q, Scalar lo, Scalar hi, Scalar gap, Scalar& need) {
+  return coordinate_axes_apart_inline(kind, q, lo, hi, gap, need);
 }
 
 std::uint64_t kept_sub_intervals(const Bernstein3& b, Scalar margin, int depth) {

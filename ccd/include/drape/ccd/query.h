@@ -66,13 +66,15 @@ struct Options {
   /// (a double root, a tangential contact) is tested at its midpoint. 2^-30 of the step.
   int max_subdivision_depth = 30;
 
-  /// Vincent and conservative (at zero thickness): levels of the separation stage, 0 to 6.
-  /// When the cubic may vanish in the step, it is halved this many times (de Casteljau, 2^depth
-  /// sub-intervals) and each run of sub-intervals where it may vanish is tested for a
-  /// separating axis between the features; when every one is separated the test ends there
-  /// (Path::Separated) with the answer root finding would give (no contact), without it.
-  /// 0 turns the stage off: the paper's filter alone. It decides nothing differently; deeper
-  /// separates more tests and costs more on each.
+  /// Vincent and conservative: levels of the separation stage, 0 to 6. When the cubic may
+  /// vanish in the step, it is halved this many times (de Casteljau, 2^depth sub-intervals) and
+  /// each run of sub-intervals where it may vanish (conservative: come within what the
+  /// thickness allows) is tested for a separating axis between the features; when every one is
+  /// separated the test ends there (Path::Separated): no contact, without root finding or
+  /// search. 0 turns the stage off: the paper's filter alone. Vincent's answers are the same
+  /// either way; conservative's too, but for near misses within its time tolerance of the
+  /// thickness, which the search may report and the stage clears. Deeper separates more tests
+  /// and costs more on each.
   int separation_depth = 2;
 
   /// Conservative: an interval narrower than this (units of the step) that neither the cubic

@@ -1,0 +1,69 @@
+// The AVX2 helpers (ccd/src/avx2.h): each is the scalar operation it stands for, bit for bit,
+// NaN, signed zeros and infinities included; the point loads give a point's coordinates.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstring>
+#include <limits>
+
+#include "avx2.h"
+
+using namespace drape;
+using namespace drape::ccd;
+
+namespace {
+
+bool same_bits(double a, double b) { return std::memcmp(&a, &b, sizeof a) == 0; }
+
+__attribute__((target("avx2"))) void apply(const double (&a)[4], const double (&b)[4], double (&max)[4],
+                                           double (&min)[4], double (&abs)[4]) {
+  const __m256d x = _mm256_loadu_pd(a), y = _mm256_loadu_pd(b);
+  _mm256_storeu_pd(max, detail::max4(x, y));
+  _mm256_storeu_pd(min, detail::min4(x, y));
+  _mm256_storeu_pd(abs, detail::abs4(x));
+}
+
+__attribute__((target("avx2"))) void load(const Query& q, int i, double (&start)[4], double (&end)[4]) {
+  _mm256_storeu_pd(start, detail::load_start(q, i));
+  _mm256_storeu_pd(end, detail::load_end(q, i));
+}
+
+}  // namespace
+
+TEST(Avx2, MinMaxAbsAreTheStdFunctions) {
+  if (!detail::cpu_has_avx2) GTEST_SKIP() << "no AVX2 on this machine";
+  const double inf = std::numeric_limits<double>::infinity();
+  const double values[] = {std::numeric_limits<double>::quiet_NaN(), -0.0, 0.0, 1.0, -1.0, inf, -inf,
+                           std::numeric_limits<double>::denorm_min(), 2.5};
+  std::size_t checked = 0;
+  for (double a : values)
+    for (double b : values) {
+      const double x[4] = {a, b, a, -a}, y[4] = {b, a, -b, b};
+      double max[4], min[4], abs[4];
+      apply(x, y, max, min, abs);
+      for (int lane = 0; lane < 4; ++lane) {
+        EXPECT_TRUE(same_bits(max[lane], std::max(x[lane], y[lane]))) << x[lane] << " " << y[lane];
+        EXPECT_TRUE(same_bits(min[lane], std::min(x[lane], y[lane]))) << x[lane] << " " << y[lane];
+        EXPECT_TRUE(same_bits(abs[lane], std::abs(x[lane]))) << x[lane];
+        ++checked;
+      }
+    }
+  EXPECT_EQ(checked, 4u * 81u);
+}
+
+TEST(Avx2, PointLoadsGiveThePoint) {
+  if (!detail::cpu_has_avx2) GTEST_SKIP() << "no AVX2 on this machine";
+  Query q;
+  for (int i = 0; i < 4; ++i) {
+    q.start[i] = Vec3(10 * i + 1, 10 * i + 2, 10 * i + 3);
+    q.end[i] = Vec3(-10 * i - 1, -10 * i - 2, -10 * i - 3);
+  }
+  for (int i = 0; i < 4; ++i) {
+    double start[4], end[4];
+    load(q, i, start, end);
+    for (int k = 0; k < 3; ++k) {
+      EXPECT_EQ(start[k], q.start[i][k]) << i << " " << k;
+      EXPECT_EQ(end[k], q.end[i][k]) << i << " " << k;
+    }
+  }
+}
