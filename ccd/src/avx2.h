@@ -6,6 +6,7 @@
 
 #include <immintrin.h>
 
+#include "drape/ccd/coplanarity.h"
 #include "drape/ccd/query.h"
 
 #define DRAPE_AVX2 __attribute__((target("avx2"), always_inline)) inline
@@ -45,5 +46,26 @@ DRAPE_AVX2 __m256d load_point_followed(const Vec3& p) { return _mm256_loadu_pd(p
 /// last point has nothing after it in the query.
 DRAPE_AVX2 __m256d load_start(const Query& q, int i) { return load_point_followed(q.start[i]); }
 DRAPE_AVX2 __m256d load_end(const Query& q, int i) { return i < 3 ? load_point_followed(q.end[i]) : load_point(q.end[i]); }
+
+/// filter_culls(cubic) from b = (b0, b1, b2, b3) in a register and the error: every comparison
+/// and every min and max of the scalar code (cubic_poorly_resolved, same_strict_sign,
+/// signs_cull), in its order, so the same answer for every input, NaN included.
+DRAPE_AVX2 bool filter_culls_avx2(__m256d b, Scalar error) {
+  const __m128d b01 = _mm256_castpd256_pd128(b), b23 = _mm256_extractf128_pd(b, 1);
+  const __m128d abs01 = _mm_andnot_pd(_mm_set1_pd(-0.0), b01), abs23 = _mm_andnot_pd(_mm_set1_pd(-0.0), b23);
+  // max_abs: std::max({|b0|, |b1|, |b2|, |b3|}), left to right; maxsd(x, m) is std::max(m, x).
+  __m128d largest = _mm_max_sd(_mm_unpackhi_pd(abs01, abs01), abs01);
+  largest = _mm_max_sd(abs23, largest);
+  largest = _mm_max_sd(_mm_unpackhi_pd(abs23, abs23), largest);
+  const bool poorly_resolved = _mm_cvtsd_f64(largest) <= POORLY_RESOLVED_RATIO * error;
+  // same_strict_sign: std::min and std::max of (b0, b1) and (b2, b3), then of the two.
+  const __m128d evens = _mm_unpacklo_pd(b01, b23), odds = _mm_unpackhi_pd(b01, b23);  // (b0, b2), (b1, b3)
+  const __m128d pair_min = _mm_min_pd(odds, evens), pair_max = _mm_max_pd(odds, evens);
+  const Scalar lo = _mm_cvtsd_f64(_mm_min_sd(_mm_unpackhi_pd(pair_min, pair_min), pair_min));
+  const Scalar hi = _mm_cvtsd_f64(_mm_max_sd(_mm_unpackhi_pd(pair_max, pair_max), pair_max));
+  // std::min(|b0|, |b3|).
+  const Scalar ends = _mm_cvtsd_f64(_mm_min_sd(_mm_unpackhi_pd(abs23, abs23), abs01));
+  return (!poorly_resolved) & ((lo > 0) | (hi < 0)) & (ends > error);
+}
 
 }  // namespace drape::ccd::detail

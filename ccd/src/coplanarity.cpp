@@ -53,8 +53,10 @@ DRAPE_AVX2 Scalar larger_norm(__m256d s, __m256d e) {
   return _mm_cvtsd_f64(_mm_max_sd(_mm_unpackhi_pd(n, n), n));
 }
 
-template <QueryKind kind>
-__attribute__((target("avx2"))) CoplanarityCubic cubic_avx2(const Query& query) {
+// The cubic of one query, into out; with CULL, first the filter's decision, and out is
+// written only when the filter does not cull (returns true when it does).
+template <QueryKind kind, bool CULL>
+__attribute__((target("avx2"))) bool cubic_avx2(const Query& query, CoplanarityCubic& out) {
   constexpr std::array<int, 4> order = coplanarity_order(kind);
   const __m256d x1s = load_start(query, order[0]), x1e = load_end(query, order[0]);
   const __m256d A0 = _mm256_sub_pd(load_start(query, order[1]), x1s);
@@ -77,23 +79,41 @@ __attribute__((target("avx2"))) CoplanarityCubic cubic_avx2(const Query& query) 
   const __m256d second = _mm256_blend_pd(_mm256_permute4x64_pd(rest, _MM_SHUFFLE(3, 1, 0, 0)), negative_zero, 0b1001);
   const __m256d third = _mm256_blend_pd(_mm256_permute4x64_pd(rest, _MM_SHUFFLE(3, 3, 2, 2)), negative_zero, 0b1001);
   const __m256d b = _mm256_div_pd(_mm256_add_pd(_mm256_add_pd(first, second), third), _mm256_set_pd(1, 3, 3, 1));
-  CoplanarityCubic out;
+  // 1-norms of A0, A1, B0, B1 and C0, C1; a, b, c the larger of each pair.
+  const Scalar a = larger_norm(A0, A1), bb = larger_norm(B0, B1), c = larger_norm(C0, C1);
+  const Scalar error = Scalar(COPLANARITY_ERROR_FACTOR) * UNIT_ROUNDOFF * a * bb * c;
+  if (CULL && filter_culls_avx2(b, error)) return true;
   // Two 128-bit stores: the caller copies the result 16 bytes at a time, and a 16-byte load
   // from the upper half of one 32-byte store may not be forwarded from it.
   _mm_storeu_pd(out.b.data(), _mm256_castpd256_pd128(b));
   _mm_storeu_pd(out.b.data() + 2, _mm256_extractf128_pd(b, 1));
-  // 1-norms of A0, A1, B0, B1 and C0, C1; a, b, c the larger of each pair.
-  const Scalar a = larger_norm(A0, A1), bb = larger_norm(B0, B1), c = larger_norm(C0, C1);
-  out.error = Scalar(COPLANARITY_ERROR_FACTOR) * UNIT_ROUNDOFF * a * bb * c;
+  out.error = error;
   out.extent = std::max({a, bb, c});
-  return out;
+  return false;
 }
 
 }  // namespace
 
 
-CoplanarityCubic vertex_face_cubic_avx2(const Query& query) { return cubic_avx2<QueryKind::VertexFace>(query); }
-CoplanarityCubic edge_edge_cubic_avx2(const Query& query) { return cubic_avx2<QueryKind::EdgeEdge>(query); }
+CoplanarityCubic vertex_face_cubic_avx2(const Query& query) {
+  CoplanarityCubic out;
+  cubic_avx2<QueryKind::VertexFace, false>(query, out);
+  return out;
+}
+
+CoplanarityCubic edge_edge_cubic_avx2(const Query& query) {
+  CoplanarityCubic out;
+  cubic_avx2<QueryKind::EdgeEdge, false>(query, out);
+  return out;
+}
+
+bool vertex_face_culled_avx2(const Query& query, CoplanarityCubic& cubic) {
+  return cubic_avx2<QueryKind::VertexFace, true>(query, cubic);
+}
+
+bool edge_edge_culled_avx2(const Query& query, CoplanarityCubic& cubic) {
+  return cubic_avx2<QueryKind::EdgeEdge, true>(query, cubic);
+}
 
 }  // namespace detail
 }  // namespace drape::ccd

@@ -89,7 +89,7 @@ Result cubic_method(const Problem& p) {
 
 Result dnf_method(const Problem& p) {
   // Unreliable roots first, as cubic does: the filter must not cull what cubic would find.
-  // (The sign cull of a resolved cubic came first, in run.)
+  // (The sign cull of a resolved cubic came first, in one_query or elementary_ccd.)
   if (cubic_poorly_resolved(p.cubic)) return degenerate_path(p);
   return cubic_method(p);
 }
@@ -103,7 +103,7 @@ Result vincent_method(const Problem& p) {
   const Bernstein3& b = p.cubic.b;
   // Unreliable roots first, as cubic does: the filter must not cull what cubic would find.
   if (cubic_poorly_resolved(p.cubic)) return degenerate_path(p);
-  // (The sign cull came first, in run.)
+  // (The sign cull came first, in one_query or elementary_ccd.)
   const int variations = sign_variations(b);
   if (variations == 0 && !root_possible_at_start(p) && !root_possible_at_end(p)) return Result{};  // culled
   // The separation stage: wherever the cubic may vanish, the features are apart. That covers
@@ -171,10 +171,10 @@ Result vincent_method(const Problem& p) {
   return result;
 }
 
-Result run(QueryKind kind, const Query& query, const Options& options, const CoplanarityCubic& cubic) {
-  // The filter's cull (dnf and vincent) first: most tests of a cloth step end here, before
-  // anything else is set up.
-  if ((options.method == Method::Vincent || options.method == Method::Dnf) && filter_culls(cubic)) return Result{};
+bool filters(const Options& options) { return options.method == Method::Vincent || options.method == Method::Dnf; }
+
+// The method on a test the filter did not cull (or whose method has no filter).
+Result run_unculled(QueryKind kind, const Query& query, const Options& options, const CoplanarityCubic& cubic) {
   const Problem p{kind, query, options, cubic};
   switch (options.method) {
     case Method::Cubic: return cubic_method(p);
@@ -185,22 +185,32 @@ Result run(QueryKind kind, const Query& query, const Options& options, const Cop
   return Result{};
 }
 
+// One query: the filter's cull first (dnf and vincent), decided with the cubic in one go; most
+// tests of a cloth step end there, before anything else is set up.
+Result one_query(QueryKind kind, const Query& query, const Options& options) {
+  if (!filters(options)) return run_unculled(kind, query, options, detail::query_cubic(kind, query));
+  CoplanarityCubic cubic;
+  if (detail::query_culled(kind, query, cubic)) return Result{};
+  return run_unculled(kind, query, options, cubic);
+}
+
 }  // namespace
 
 Result vertex_face_ccd(const VertexFaceQuery& query, const Options& options) {
-  return run(QueryKind::VertexFace, query, options, detail::query_cubic(QueryKind::VertexFace, query));
+  return one_query(QueryKind::VertexFace, query, options);
 }
 
 Result edge_edge_ccd(const EdgeEdgeQuery& query, const Options& options) {
-  return run(QueryKind::EdgeEdge, query, options, detail::query_cubic(QueryKind::EdgeEdge, query));
+  return one_query(QueryKind::EdgeEdge, query, options);
 }
 
 Result elementary_ccd(QueryKind kind, const Query& query, const Options& options) {
-  return run(kind, query, options, detail::query_cubic(kind, query));
+  return one_query(kind, query, options);
 }
 
 Result elementary_ccd(QueryKind kind, const Query& query, const Options& options, const CoplanarityCubic& cubic) {
-  return run(kind, query, options, cubic);
+  if (filters(options) && filter_culls(cubic)) return Result{};
+  return run_unculled(kind, query, options, cubic);
 }
 
 }  // namespace drape::ccd

@@ -90,12 +90,27 @@ bool roots_apart(QueryKind kind, const Query& q, const CoplanarityCubic& cubic, 
 CoplanarityCubic vertex_face_cubic_avx2(const Query& query);
 CoplanarityCubic edge_edge_cubic_avx2(const Query& query);
 
-/// coplanarity_cubic(kind, query) bit for bit, with AVX2 where the machine has it: the
-/// one-query entry points start here.
+/// filter_culls(coplanarity_cubic(kind, query)), computed with AVX2 (only where cpu_has_avx2);
+/// when false, cubic receives the cubic, bit for bit (when true it is not written).
+/// coplanarity.cpp.
+bool vertex_face_culled_avx2(const Query& query, CoplanarityCubic& cubic);
+bool edge_edge_culled_avx2(const Query& query, CoplanarityCubic& cubic);
+
+/// coplanarity_cubic(kind, query) bit for bit, with AVX2 where the machine has it.
 inline CoplanarityCubic query_cubic(QueryKind kind, const Query& query) {
   if (avx2_enabled())
     return kind == QueryKind::VertexFace ? vertex_face_cubic_avx2(query) : edge_edge_cubic_avx2(query);
   return coplanarity_cubic(kind, query);
+}
+
+/// Whether the filter culls the query (filter_culls of its cubic); when not, cubic receives
+/// the cubic (query_cubic's bits). With AVX2 where the machine has it: the one-query entry
+/// points of dnf and vincent start here.
+inline bool query_culled(QueryKind kind, const Query& query, CoplanarityCubic& cubic) {
+  if (avx2_enabled())
+    return kind == QueryKind::VertexFace ? vertex_face_culled_avx2(query, cubic) : edge_edge_culled_avx2(query, cubic);
+  cubic = coplanarity_cubic(kind, query);
+  return filter_culls(cubic);
 }
 
 /// The conservative method, and the degenerate path of the others (use_cubic = false: the

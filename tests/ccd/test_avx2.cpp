@@ -7,6 +7,7 @@
 #include <limits>
 
 #include "avx2.h"
+#include "drape/ccd/coplanarity.h"
 
 using namespace drape;
 using namespace drape::ccd;
@@ -21,6 +22,10 @@ __attribute__((target("avx2"))) void apply(const double (&a)[4], const double (&
   _mm256_storeu_pd(max, detail::max4(x, y));
   _mm256_storeu_pd(min, detail::min4(x, y));
   _mm256_storeu_pd(abs, detail::abs4(x));
+}
+
+__attribute__((target("avx2"))) bool culls(const Bernstein3& b, Scalar error) {
+  return detail::filter_culls_avx2(_mm256_loadu_pd(b.data()), error);
 }
 
 __attribute__((target("avx2"))) void load(const Query& q, int i, double (&start)[4], double (&end)[4]) {
@@ -49,6 +54,29 @@ TEST(Avx2, MinMaxAbsAreTheStdFunctions) {
       }
     }
   EXPECT_EQ(checked, 4u * 81u);
+}
+
+TEST(Avx2, FilterDecisionIsFilterCulls) {
+  // Every combination of four coefficients from a set of values around the decision's edges
+  // (signs, zeros, within and beyond 2048 errors, infinities, NaN) and three errors.
+  if (!detail::cpu_has_avx2) GTEST_SKIP() << "no AVX2 on this machine";
+  const double inf = std::numeric_limits<double>::infinity(), nan = std::numeric_limits<double>::quiet_NaN();
+  const double values[] = {nan, -0.0, 0.0, 1e-3, -1e-3, 1.5, -1.5, 1e3, -1e3, inf, -inf};
+  std::size_t checked = 0, culled = 0;
+  for (double error : {0.0, 1e-3, 1.0, nan})
+    for (double b0 : values)
+      for (double b1 : values)
+        for (double b2 : values)
+          for (double b3 : values) {
+            CoplanarityCubic c;
+            c.b = {b0, b1, b2, b3};
+            c.error = error;
+            const bool expected = filter_culls(c);
+            ASSERT_EQ(culls(c.b, error), expected) << b0 << " " << b1 << " " << b2 << " " << b3 << " error " << error;
+            ++checked;
+            culled += expected;
+          }
+  EXPECT_GT(culled, 1000u);  // both answers occur (2,274 of 58,564)
 }
 
 TEST(Avx2, PointLoadsGiveThePoint) {

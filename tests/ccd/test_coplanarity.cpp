@@ -107,13 +107,23 @@ TEST(Coplanarity, OneQueryKernelMatchesTheReferenceBitForBit) {
     queries.push_back({trial % 2 ? QueryKind::EdgeEdge : QueryKind::VertexFace, q});
   }
   const auto same_bits = [](Scalar a, Scalar b) { return std::memcmp(&a, &b, sizeof a) == 0; };
-  std::size_t differences = 0;
+  const auto same_cubic = [&](const CoplanarityCubic& x, const CoplanarityCubic& y) {
+    bool same = same_bits(x.error, y.error) && same_bits(x.extent, y.extent);
+    for (int i = 0; i < 4; ++i) same = same && same_bits(x.b[i], y.b[i]);
+    return same;
+  };
+  // The cubic alone, and the filter's decision with it (the cubic written when not culled).
+  std::size_t differences = 0, decisions = 0, culled = 0;
   for (const auto& [kind, q] : queries) {
     const CoplanarityCubic reference = coplanarity_cubic(kind, q);
-    const CoplanarityCubic fast = detail::query_cubic(kind, q);  // AVX2: checked above
-    bool same = same_bits(reference.error, fast.error) && same_bits(reference.extent, fast.extent);
-    for (int i = 0; i < 4; ++i) same = same && same_bits(reference.b[i], fast.b[i]);
-    differences += !same;
+    differences += !same_cubic(reference, detail::query_cubic(kind, q));  // AVX2: checked above
+    CoplanarityCubic fast;
+    const bool fast_culls = detail::query_culled(kind, q, fast);
+    decisions += fast_culls != filter_culls(reference) || (!fast_culls && !same_cubic(reference, fast));
+    culled += fast_culls;
   }
   EXPECT_EQ(differences, 0u) << "of " << queries.size();
+  EXPECT_EQ(decisions, 0u) << "of " << queries.size();
+  EXPECT_GT(culled, queries.size() / 10);             // both decisions occur
+  EXPECT_LT(culled, queries.size() - queries.size() / 10);
 }
