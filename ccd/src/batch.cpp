@@ -274,7 +274,7 @@ BatchCounters run_range(const BatchInput& input, std::span<const Pair> pairs, co
       cubic.error = c.error[i];
       cubic.extent = c.extent[i];
       assert(bool(c.culled[i]) == filter_culls(cubic));
-      const Result result = elementary_ccd(kind, gather(input, pairs[first + i]), options, cubic);
+      const Result result = detail::run_unculled(kind, gather(input, pairs[first + i]), options, cubic);
       counters.add(result);
       if (result.hit) hits.push_back({first + i, result});
     }

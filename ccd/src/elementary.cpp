@@ -32,10 +32,11 @@ namespace {
 
 using detail::Problem;
 
-// The inside test of the root-finding methods at a candidate time: the closest points of the
-// features there (the standard formulas) and their distance against the tolerance.
+// How close the features must come to touch: the thickness plus the contact tolerance.
 Scalar contact_distance(const Problem& p) { return p.options.thickness + p.options.contact_tolerance * p.cubic.extent; }
 
+// The inside test of the root-finding methods at a candidate time: the closest points of the
+// features there (the standard formulas) and their distance against the tolerance.
 bool touching_at(const Problem& p, Scalar t, Result& result) {
   const auto x = detail::positions_at<Scalar>(p.query, t);
   Scalar distance_squared = 0;
@@ -173,8 +174,10 @@ Result vincent_method(const Problem& p) {
 
 bool filters(const Options& options) { return options.method == Method::Vincent || options.method == Method::Dnf; }
 
-// The method on a test the filter did not cull (or whose method has no filter).
-Result run_unculled(QueryKind kind, const Query& query, const Options& options, const CoplanarityCubic& cubic) {
+}  // namespace
+
+Result detail::run_unculled(QueryKind kind, const Query& query, const Options& options,
+                            const CoplanarityCubic& cubic) {
   const Problem p{kind, query, options, cubic};
   switch (options.method) {
     case Method::Cubic: return cubic_method(p);
@@ -184,6 +187,10 @@ Result run_unculled(QueryKind kind, const Query& query, const Options& options, 
   }
   return Result{};
 }
+
+namespace {
+
+using detail::run_unculled;
 
 // One query: the filter's cull first (dnf and vincent), decided with the cubic in one go; most
 // tests of a cloth step end there, before anything else is set up.

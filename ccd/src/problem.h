@@ -113,6 +113,11 @@ inline bool query_culled(QueryKind kind, const Query& query, CoplanarityCubic& c
   return filter_culls(cubic);
 }
 
+/// elementary_ccd with the cubic, for a test the filter does not cull (dnf and vincent: the
+/// caller has checked filter_culls) or whose method has no filter: the batch, whose kernel
+/// decided the cull already. elementary.cpp.
+Result run_unculled(QueryKind kind, const Query& query, const Options& options, const CoplanarityCubic& cubic);
+
 /// The conservative method, and the degenerate path of the others (use_cubic = false: the
 /// cubic says nothing, decide by distance alone).
 Result conservative_search(const Problem& p, bool use_cubic);
