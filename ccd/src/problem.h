@@ -72,13 +72,15 @@ bool coordinate_axes_apart(QueryKind kind, const Query& q, Scalar lo, Scalar hi,
 /// all beyond margin in one sign (certainly_nonzero fails). separation.cpp.
 std::uint64_t kept_sub_intervals(const Bernstein3& b, Scalar margin, int depth);
 
-/// The filter's separation stage: the step is halved depth times (de Casteljau, 2^depth
-/// sub-intervals, depth at most 6); a sub-interval is dropped when the cubic certainly has no
-/// root on it (its coefficients exceed twice their error bound and the rounding of any root
-/// finder's evaluation, in one sign), and each run of adjacent kept sub-intervals (at most
-/// three) must be apart (apart_over). True when they all are: at every root of the cubic in the
-/// step, computed or exact, the features are more than gap apart. depth 0 (or less) returns
-/// false, and so does a run covering the whole step (the broad phase's boxes overlap there).
+/// The filter's separation stage. First the features' coordinate boxes over the whole step
+/// (coordinate_axes_apart over [0, 1]): apart there, they are apart at every root. Otherwise the
+/// step is halved depth times (de Casteljau, 2^depth sub-intervals, depth at most 6); a
+/// sub-interval is dropped when the cubic certainly has no root on it (its coefficients exceed
+/// twice their error bound and the rounding of any root finder's evaluation, in one sign), and
+/// each run of adjacent kept sub-intervals (at most three) must be apart (apart_over). True
+/// when they all are: at every root of the cubic in the step, computed or exact, the features
+/// are more than gap apart. depth 0 (or less) returns false (no stage), and so does a run
+/// covering the whole step.
 /// With cubic_margin > 0 a sub-interval is dropped only where |cubic| certainly exceeds it too:
 /// then the features are more than gap apart wherever |cubic| may be at most cubic_margin
 /// (conservative with a thickness: cubic_margin = thickness |e1| |e2|, gap = thickness).

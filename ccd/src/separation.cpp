@@ -196,6 +196,11 @@ std::uint64_t kept_sub_intervals(const Bernstein3& b, Scalar margin, int depth) 
 bool roots_apart(QueryKind kind, const Query& q, const CoplanarityCubic& cubic, Scalar gap, int depth,
                  Scalar cubic_margin) {
   if (depth <= 0) return false;
+  // The whole step first: features whose boxes stay apart over it are apart at every root,
+  // wherever the cubic has them. The broad phase boxes whole triangles, so most of a cloth
+  // step's vertex-face and edge-edge pairs end here, without the tree of halvings.
+  Scalar need = 0;
+  if (coordinate_axes_apart_inline(kind, q, 0, 1, gap, need)) return true;
   depth = std::min(depth, MAX_SEPARATION_DEPTH);
   // A sub-interval holds no root of the exact or the computed cubic, and no sign change of a
   // root finder's evaluation of it, when its coefficients exceed this in one sign: twice the

@@ -217,3 +217,20 @@ TEST(Separation, ConservativeKeepsEveryBuiltContact) {
     EXPECT_GT(separated, 1'000u) << "thickness " << thickness;  // the stage does decide tests here
   }
 }
+
+TEST(Separation, FeaturesApartOverTheWholeStepNeedNoTree) {
+  // A vertex sliding in the plane of a triangle, far outside it: the cubic is zero over the
+  // whole step, so every sub-interval of the tree is kept, and only the whole step's boxes
+  // show the features apart. Move the vertex onto the triangle and they are not.
+  Query q;
+  q.start = {Vec3(5, 0, 0), Vec3(0, 0, 0), Vec3(1, 0, 0), Vec3(0, 1, 0)};
+  q.end = {Vec3(6, 0.5, 0), Vec3(0, 0, 0), Vec3(1, 0, 0), Vec3(0, 1, 0)};
+  const CoplanarityCubic cubic = coplanarity_cubic(QueryKind::VertexFace, q);
+  const std::uint64_t all = (std::uint64_t(1) << 4) - 1;
+  ASSERT_EQ(detail::kept_sub_intervals(cubic.b, 2 * cubic.error, 2), all);
+  EXPECT_TRUE(detail::roots_apart(QueryKind::VertexFace, q, cubic, 0.0, 2));
+  EXPECT_FALSE(detail::roots_apart(QueryKind::VertexFace, q, cubic, 0.0, 0));  // depth 0: no stage
+  EXPECT_FALSE(detail::roots_apart(QueryKind::VertexFace, q, cubic, 4.5, 2));  // the gap is wider than the boxes' distance
+  q.end[0] = Vec3(0.2, 0.2, 0);
+  EXPECT_FALSE(detail::roots_apart(QueryKind::VertexFace, q, coplanarity_cubic(QueryKind::VertexFace, q), 0.0, 2));
+}
