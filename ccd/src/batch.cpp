@@ -70,11 +70,16 @@ struct ChunkCubics {
   // The differences x2 - x1, x3 - x1, x4 - x1 (A, B, C) at t = 0 and t = 1, per coordinate.
   alignas(64) Scalar a0[3][CHUNK], a1[3][CHUNK], b0[3][CHUNK], b1[3][CHUNK], c0[3][CHUNK], c1[3][CHUNK];
   alignas(64) Scalar coefficient[4][CHUNK], error[CHUNK], extent[CHUNK];
-  alignas(64) std::int64_t culled[CHUNK];  // filter_culls of each cubic (64 bits: the SIMD lanes of the doubles)
-  // The conservative method's first question at zero thickness: resolved, and every
-  // coefficient beyond its error with one sign (certainly_nonzero on the whole step).
-  alignas(64) std::int64_t certainly_apart[CHUNK];
+  static_assert(CHUNK == 64, "one bit per test of a chunk in a 64-bit mask");
+  std::uint64_t culled = 0;  // bit i: filter_culls of test i's cubic
+  // Bit i: the conservative method's first question at zero thickness: resolved, and every
+  // coefficient beyond its error with one sign (certainly_nonzero on the whole step). Only
+  // computed where asked for (the AVX2 path's APART).
+  std::uint64_t certainly_apart = 0;
 };
+
+// The tests [0, n) of a chunk as bits.
+std::uint64_t chunk_bits(std::size_t n) { return n >= CHUNK ? ~std::uint64_t(0) : (std::uint64_t(1) << n) - 1; }
 
 std::array<std::int32_t, 4> points(const VertexFacePair& p) { return {p.vertex, p.face[0], p.face[1], p.face[2]}; }
 std::array<std::int32_t, 4> points(const EdgeEdgePair& p) { return {p.edge_a[0], p.edge_a[1], p.edge_b[0], p.edge_b[1]}; }
@@ -84,6 +89,7 @@ std::array<std::int32_t, 4> points(const EdgeEdgePair& p) { return {p.edge_a[0],
 // machines with AVX2 run gather_cubics_avx2 below instead, so this needs no AVX2 clone.
 void compute_cubics(ChunkCubics& c, std::size_t n) {
   constexpr Scalar unit_roundoff = std::numeric_limits<Scalar>::epsilon() / 2;
+  c.culled = c.certainly_apart = 0;
   for (std::size_t i = 0; i < n; ++i) {
     const auto cross = [&](const Scalar (*u)[CHUNK], const Scalar (*v)[CHUNK], Scalar out[3]) {
       out[0] = u[1][i] * v[2][i] - u[2][i] * v[1][i];
@@ -114,10 +120,10 @@ void compute_cubics(ChunkCubics& c, std::size_t n) {
     const bool resolved = !(largest <= POORLY_RESOLVED_RATIO * c.error[i]);
     const bool one_sign = (lo > 0) | (hi < 0);
     const bool ends_clear = std::min(std::abs(k0), std::abs(k3)) > c.error[i];
-    c.culled[i] = std::int64_t(resolved & one_sign & ends_clear);
+    c.culled |= std::uint64_t(resolved & one_sign & ends_clear) << i;
     const Scalar e = c.error[i];
     const bool all_above = (k0 > e) & (k1 > e) & (k2 > e) & (k3 > e), all_below = (k0 < -e) & (k1 < -e) & (k2 < -e) & (k3 < -e);
-    c.certainly_apart[i] = std::int64_t(resolved & (all_above | all_below));
+    c.certainly_apart |= std::uint64_t(resolved & (all_above | all_below)) << i;
   }
 }
 
@@ -156,10 +162,13 @@ struct Lanes3 {
   __m256d x, y, z;
 };
 
-// Point k of four tests, one coordinate per register.
-DRAPE_AVX2 Lanes3 load4(const Vec3* base, const std::int32_t (&index)[4]) {
-  const double *p0 = base[index[0]].data(), *p1 = base[index[1]].data(), *p2 = base[index[2]].data(),
-               *p3 = base[index[3]].data();
+// Point k (of the pair's points in coplanarity order) of four tests, one coordinate per
+// register; the indices read straight from the pairs.
+template <QueryKind kind, int k, class Pair>
+DRAPE_AVX2 Lanes3 load4(const Vec3* base, const Pair* const (&pair)[4]) {
+  constexpr int point = coplanarity_order(kind)[k];
+  const double *p0 = base[points(*pair[0])[point]].data(), *p1 = base[points(*pair[1])[point]].data(),
+               *p2 = base[points(*pair[2])[point]].data(), *p3 = base[points(*pair[3])[point]].data();
   const __m256d xy02 = _mm256_insertf128_pd(_mm256_castpd128_pd256(_mm_loadu_pd(p0)), _mm_loadu_pd(p2), 1);
   const __m256d xy13 = _mm256_insertf128_pd(_mm256_castpd128_pd256(_mm_loadu_pd(p1)), _mm_loadu_pd(p3), 1);
   return {_mm256_unpacklo_pd(xy02, xy13), _mm256_unpackhi_pd(xy02, xy13), _mm256_set_pd(p3[2], p2[2], p1[2], p0[2])};
@@ -184,24 +193,23 @@ DRAPE_AVX2 __m256d l1_4(const Lanes3& s, const Lanes3& e) {
               _mm256_add_pd(_mm256_add_pd(abs4(e.x), abs4(e.y)), abs4(e.z)));
 }
 
-// Tests [0, n) of pairs, n <= CHUNK, into c (the arrays a0..c1 are not filled).
-template <QueryKind kind, class Pair>
+// Tests [0, n) of pairs, n <= CHUNK, into c (the arrays a0..c1 are not filled); with APART
+// also c.certainly_apart (the conservative method's first question), else it stays 0.
+template <QueryKind kind, bool APART, class Pair>
 __attribute__((target("avx2"))) void gather_cubics_avx2(const BatchInput& input, const Pair* pairs, std::size_t n,
                                                         ChunkCubics& c) {
-  constexpr std::array<int, 4> order = coplanarity_order(kind);
   constexpr Scalar unit_roundoff = std::numeric_limits<Scalar>::epsilon() / 2;
   const __m256d zero = _mm256_setzero_pd();
+  const Vec3 *start = input.start.data(), *end = input.end.data();
+  std::uint64_t culled_bits = 0, apart_bits = 0;
   for (std::size_t i = 0; i < n; i += 4) {
-    // The points of four tests (a tail repeats the last test; its lanes are not read).
-    std::int32_t index[4][4];
-    for (int t = 0; t < 4; ++t) {
-      const auto p = points(pairs[std::min(i + t, n - 1)]);
-      for (int k = 0; k < 4; ++k) index[k][t] = p[order[k]];
-    }
-    const Lanes3 s1 = load4(input.start.data(), index[0]), e1 = load4(input.end.data(), index[0]);
-    const Lanes3 A0 = sub4(load4(input.start.data(), index[1]), s1), A1 = sub4(load4(input.end.data(), index[1]), e1);
-    const Lanes3 B0 = sub4(load4(input.start.data(), index[2]), s1), B1 = sub4(load4(input.end.data(), index[2]), e1);
-    const Lanes3 C0 = sub4(load4(input.start.data(), index[3]), s1), C1 = sub4(load4(input.end.data(), index[3]), e1);
+    // Four tests (a tail repeats the last test; its bits are dropped below).
+    const Pair* const pair[4] = {pairs + i, pairs + std::min(i + 1, n - 1), pairs + std::min(i + 2, n - 1),
+                                 pairs + std::min(i + 3, n - 1)};
+    const Lanes3 s1 = load4<kind, 0>(start, pair), e1 = load4<kind, 0>(end, pair);
+    const Lanes3 A0 = sub4(load4<kind, 1>(start, pair), s1), A1 = sub4(load4<kind, 1>(end, pair), e1);
+    const Lanes3 B0 = sub4(load4<kind, 2>(start, pair), s1), B1 = sub4(load4<kind, 2>(end, pair), e1);
+    const Lanes3 C0 = sub4(load4<kind, 3>(start, pair), s1), C1 = sub4(load4<kind, 3>(end, pair), e1);
     const Lanes3 b0c0 = cross4(B0, C0), b1c0 = cross4(B1, C0), b0c1 = cross4(B0, C1), b1c1 = cross4(B1, C1);
     const __m256d three = _mm256_set1_pd(3.0);
     const __m256d k0 = dot4(A0, b0c0);
@@ -222,19 +230,20 @@ __attribute__((target("avx2"))) void gather_cubics_avx2(const BatchInput& input,
     const __m256d resolved = _mm256_cmp_pd(largest, _mm256_mul_pd(_mm256_set1_pd(POORLY_RESOLVED_RATIO), e), _CMP_NLE_UQ);
     const __m256d one_sign = _mm256_or_pd(_mm256_cmp_pd(lo, zero, _CMP_GT_OQ), _mm256_cmp_pd(hi, zero, _CMP_LT_OQ));
     const __m256d ends_clear = _mm256_cmp_pd(min4(abs4(k0), abs4(k3)), e, _CMP_GT_OQ);
-    const __m256d minus_e = _mm256_sub_pd(zero, e);
-    const __m256d above = _mm256_and_pd(_mm256_and_pd(_mm256_cmp_pd(k0, e, _CMP_GT_OQ), _mm256_cmp_pd(k1, e, _CMP_GT_OQ)),
-                                        _mm256_and_pd(_mm256_cmp_pd(k2, e, _CMP_GT_OQ), _mm256_cmp_pd(k3, e, _CMP_GT_OQ)));
-    const __m256d below =
-        _mm256_and_pd(_mm256_and_pd(_mm256_cmp_pd(k0, minus_e, _CMP_LT_OQ), _mm256_cmp_pd(k1, minus_e, _CMP_LT_OQ)),
-                      _mm256_and_pd(_mm256_cmp_pd(k2, minus_e, _CMP_LT_OQ), _mm256_cmp_pd(k3, minus_e, _CMP_LT_OQ)));
-    const int culled = _mm256_movemask_pd(_mm256_and_pd(_mm256_and_pd(resolved, one_sign), ends_clear));
-    const int apart = _mm256_movemask_pd(_mm256_and_pd(resolved, _mm256_or_pd(above, below)));
-    for (int t = 0; t < 4; ++t) {
-      c.culled[i + t] = (culled >> t) & 1;
-      c.certainly_apart[i + t] = (apart >> t) & 1;
+    culled_bits |= std::uint64_t(_mm256_movemask_pd(_mm256_and_pd(_mm256_and_pd(resolved, one_sign), ends_clear))) << i;
+    if constexpr (APART) {
+      const __m256d minus_e = _mm256_sub_pd(zero, e);
+      const __m256d above =
+          _mm256_and_pd(_mm256_and_pd(_mm256_cmp_pd(k0, e, _CMP_GT_OQ), _mm256_cmp_pd(k1, e, _CMP_GT_OQ)),
+                        _mm256_and_pd(_mm256_cmp_pd(k2, e, _CMP_GT_OQ), _mm256_cmp_pd(k3, e, _CMP_GT_OQ)));
+      const __m256d below =
+          _mm256_and_pd(_mm256_and_pd(_mm256_cmp_pd(k0, minus_e, _CMP_LT_OQ), _mm256_cmp_pd(k1, minus_e, _CMP_LT_OQ)),
+                        _mm256_and_pd(_mm256_cmp_pd(k2, minus_e, _CMP_LT_OQ), _mm256_cmp_pd(k3, minus_e, _CMP_LT_OQ)));
+      apart_bits |= std::uint64_t(_mm256_movemask_pd(_mm256_and_pd(resolved, _mm256_or_pd(above, below)))) << i;
     }
   }
+  c.culled = culled_bits & chunk_bits(n);
+  c.certainly_apart = apart_bits & chunk_bits(n);
 }
 
 // The tests [begin, end) of one kind: cubics a chunk at a time; dnf and vincent decide the
@@ -252,28 +261,30 @@ BatchCounters run_range(const BatchInput& input, std::span<const Pair> pairs, co
   ChunkCubics c;
   for (std::size_t first = begin; first < end; first += CHUNK) {
     const std::size_t n = std::min(CHUNK, end - first);
-    if (detail::avx2_enabled()) {
-      gather_cubics_avx2<kind>(input, pairs.data() + first, n, c);
-    } else {
+    if (!detail::avx2_enabled()) {
       gather_cubics(input, pairs.data() + first, n, order, c);
+    } else if (conservative_first) {
+      gather_cubics_avx2<kind, true>(input, pairs.data() + first, n, c);
+    } else {
+      gather_cubics_avx2<kind, false>(input, pairs.data() + first, n, c);
     }
-    for (std::size_t i = 0; i < n; ++i) {
-      if (filter && c.culled[i]) {
-        ++counters.tests;
-        ++counters.culled;
-        continue;
-      }
-      if (conservative_first && c.certainly_apart[i]) {  // a miss, one interval examined
-        ++counters.tests;
-        ++counters.culled;
-        ++counters.root_solves;
-        continue;
-      }
+    // The tests that end with the chunk's decisions, counted at once; the others one by one,
+    // in order.
+    std::uint64_t left = chunk_bits(n);
+    const std::uint64_t ended = filter ? c.culled : (conservative_first ? c.certainly_apart : 0);
+    const auto ended_count = static_cast<std::uint64_t>(__builtin_popcountll(ended));
+    counters.tests += ended_count;
+    counters.culled += ended_count;
+    if (conservative_first) counters.root_solves += ended_count;  // a miss, one interval examined
+    left &= ~ended;
+    while (left != 0) {
+      const int i = __builtin_ctzll(left);
+      left &= left - 1;
       CoplanarityCubic cubic;
       for (int k = 0; k < 4; ++k) cubic.b[k] = c.coefficient[k][i];
       cubic.error = c.error[i];
       cubic.extent = c.extent[i];
-      assert(bool(c.culled[i]) == filter_culls(cubic));
+      assert(bool((c.culled >> i) & 1) == filter_culls(cubic));
       const Result result = detail::run_unculled(kind, gather(input, pairs[first + i]), options, cubic);
       counters.add(result);
       if (result.hit) hits.push_back({first + i, result});
