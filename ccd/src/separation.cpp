@@ -63,12 +63,19 @@ __attribute__((always_inline)) inline std::uint64_t kept_leaves(const Bernstein3
   }
 }
 
-// The features' boxes over [lo, hi] more than need apart along x, y or z, with need the gap
-// plus the rounding margin (returned in need). Portable and AVX2 versions, the same decisions:
-// the same interpolated coordinates (start + t * motion, no FMA), exact minima and maxima.
-bool boxes_apart(QueryKind kind, const Query& q, Scalar lo, Scalar hi, Scalar gap, Scalar& need) {
+// The gap plus the rounding margin of the axis tests: the same over every interval of a query.
+Scalar gap_and_margin(const Query& q, Scalar gap) {
+  return gap + PROJECTION_ERROR_FACTOR * UNIT_ROUNDOFF * max_abs_coordinate(q);
+}
+
+// The features' boxes over [lo, hi] more than need apart along x, y or z. With NEED_GIVEN
+// need is the caller's gap_and_margin of the query; otherwise it is computed from the gap
+// (passed in need) and returned there. Portable and AVX2 versions, the same decisions: the
+// same interpolated coordinates (start + t * motion, no FMA), exact minima and maxima.
+template <bool NEED_GIVEN>
+bool boxes_apart(QueryKind kind, const Query& q, Scalar lo, Scalar hi, Scalar& need) {
   const int split = kind == QueryKind::VertexFace ? 1 : 2;
-  need = gap + PROJECTION_ERROR_FACTOR * UNIT_ROUNDOFF * max_abs_coordinate(q);
+  if (!NEED_GIVEN) need = gap_and_margin(q, need);
   for (int k = 0; k < 3; ++k) {
     Scalar p[4][2];
     for (int i = 0; i < 4; ++i) {
@@ -83,8 +90,9 @@ bool boxes_apart(QueryKind kind, const Query& q, Scalar lo, Scalar hi, Scalar ga
 
 // All three axes at once, a point's x, y, z in one register's lanes; one branch at the end
 // (which axis separates is random in a cloth step).
+template <bool NEED_GIVEN>
 __attribute__((target("avx2"))) bool boxes_apart_avx2(QueryKind kind, const Query& q, Scalar lo, Scalar hi,
-                                                      Scalar gap, Scalar& need) {
+                                                      Scalar& need) {
   const int split = kind == QueryKind::VertexFace ? 1 : 2;
   const __m256d at_lo = _mm256_set1_pd(lo), at_hi = _mm256_set1_pd(hi);
   __m256d point_lo[4], point_hi[4], largest = _mm256_setzero_pd();
@@ -95,7 +103,7 @@ __attribute__((target("avx2"))) bool boxes_apart_avx2(QueryKind kind, const Quer
     const __m256d x1 = _mm256_add_pd(start, _mm256_mul_pd(at_hi, motion));
     point_lo[i] = min4(x0, x1);
     point_hi[i] = max4(x0, x1);
-    largest = max4(largest, max4(abs4(start), abs4(end)));
+    if (!NEED_GIVEN) largest = max4(largest, max4(abs4(start), abs4(end)));
   }
   // Point 0 is always the first feature's, point 3 the second's.
   __m256d a_lo = point_lo[0], a_hi = point_hi[0], b_lo = point_lo[3], b_hi = point_hi[3];
@@ -105,9 +113,11 @@ __attribute__((target("avx2"))) bool boxes_apart_avx2(QueryKind kind, const Quer
     lo_i = min4(lo_i, point_lo[i]);
     hi_i = max4(hi_i, point_hi[i]);
   }
-  alignas(32) double lanes[4];
-  _mm256_store_pd(lanes, largest);
-  need = gap + PROJECTION_ERROR_FACTOR * UNIT_ROUNDOFF * std::max({lanes[0], lanes[1], lanes[2]});
+  if (!NEED_GIVEN) {
+    alignas(32) double lanes[4];
+    _mm256_store_pd(lanes, largest);
+    need = need + PROJECTION_ERROR_FACTOR * UNIT_ROUNDOFF * std::max({lanes[0], lanes[1], lanes[2]});
+  }
   const __m256d need4 = _mm256_set1_pd(need);
   const __m256d apart = _mm256_or_pd(_mm256_cmp_pd(_mm256_sub_pd(b_lo, a_hi), need4, _CMP_GT_OQ),
                                      _mm256_cmp_pd(_mm256_sub_pd(a_lo, b_hi), need4, _CMP_GT_OQ));
@@ -154,17 +164,19 @@ __attribute__((noinline)) bool shape_axes_apart(QueryKind kind, const Query& q, 
   return apart_along(x, split, n.cross(b), need) || apart_along(x, split, n.cross(a), need);
 }
 
-inline bool coordinate_axes_apart_inline(QueryKind kind, const Query& q, Scalar lo, Scalar hi, Scalar gap,
-                                         Scalar& need) {
-  return avx2_enabled() ? boxes_apart_avx2(kind, q, lo, hi, gap, need) : boxes_apart(kind, q, lo, hi, gap, need);
+// need: with NEED_GIVEN the query's gap_and_margin, else the gap (and gap_and_margin on return).
+template <bool NEED_GIVEN>
+inline bool coordinate_axes_apart_inline(QueryKind kind, const Query& q, Scalar lo, Scalar hi, Scalar& need) {
+  return avx2_enabled() ? boxes_apart_avx2<NEED_GIVEN>(kind, q, lo, hi, need)
+                        : boxes_apart<NEED_GIVEN>(kind, q, lo, hi, need);
 }
 
-inline bool apart_over_inline(QueryKind kind, const Query& q, Scalar lo, Scalar hi, Scalar gap) {
+// apart_over with the query's gap_and_margin already known.
+inline bool apart_over_with_need(QueryKind kind, const Query& q, Scalar lo, Scalar hi, Scalar need) {
   lo = std::max(Scalar(0), lo - TIME_WIDENING);
   hi = std::min(Scalar(1), hi + TIME_WIDENING);
   // The coordinate axes first: the cheapest, and enough for most far crossings.
-  Scalar need = 0;
-  if (coordinate_axes_apart_inline(kind, q, lo, hi, gap, need)) return true;
+  if (coordinate_axes_apart_inline<true>(kind, q, lo, hi, need)) return true;
   return shape_axes_apart(kind, q, lo, hi, need);
 }
 
@@ -182,11 +194,12 @@ __attribute__((always_inline)) inline std::uint64_t kept_at_depth(const Bernstei
 }  // namespace
 
 bool apart_over(QueryKind kind, const Query& q, Scalar lo, Scalar hi, Scalar gap) {
-  return apart_over_inline(kind, q, lo, hi, gap);
+  return apart_over_with_need(kind, q, lo, hi, gap_and_margin(q, gap));
 }
 
 bool coordinate_axes_apart(QueryKind kind, const Query& q, Scalar lo, Scalar hi, Scalar gap, Scalar& need) {
-  return coordinate_axes_apart_inline(kind, q, lo, hi, gap, need);
+  need = gap;
+  return coordinate_axes_apart_inline<false>(kind, q, lo, hi, need);
 }
 
 std::uint64_t kept_sub_intervals(const Bernstein3& b, Scalar margin, int depth) {
@@ -199,8 +212,8 @@ bool roots_apart(QueryKind kind, const Query& q, const CoplanarityCubic& cubic, 
   // The whole step first: features whose boxes stay apart over it are apart at every root,
   // wherever the cubic has them. The broad phase boxes whole triangles, so most of a cloth
   // step's vertex-face and edge-edge pairs end here, without the tree of halvings.
-  Scalar need = 0;
-  if (coordinate_axes_apart_inline(kind, q, 0, 1, gap, need)) return true;
+  Scalar need = gap;  // then the gap and the rounding margin, for every interval below
+  if (coordinate_axes_apart_inline<false>(kind, q, 0, 1, need)) return true;
   depth = std::min(depth, MAX_SEPARATION_DEPTH);
   // A sub-interval holds no root of the exact or the computed cubic, and no sign change of a
   // root finder's evaluation of it, when its coefficients exceed this in one sign: twice the
@@ -219,7 +232,7 @@ bool roots_apart(QueryKind kind, const Query& q, const CoplanarityCubic& cubic, 
     const int first = __builtin_ctzll(kept);
     const int past = first + __builtin_ctzll(~(kept >> first));  // the first dropped one after the run
     if (++runs > 3) return false;
-    if (!apart_over_inline(kind, q, first * width, past * width, gap)) return false;
+    if (!apart_over_with_need(kind, q, first * width, past * width, need)) return false;
     kept &= past >= 64 ? 0 : (~std::uint64_t(0) << past);
   }
   return true;
