@@ -1,6 +1,7 @@
 // The separation stage of the filter: where the coplanarity cubic does have roots in the step,
-// de Casteljau halving locates them in short sub-intervals, and a separating axis over each
-// shows the features apart there. ccd.md, "The separation stage".
+// the features' boxes over the whole step, or de Casteljau halving that locates the roots in
+// short sub-intervals and a separating axis over each, show the features apart there. ccd.md,
+// "The separation stage".
 #include "avx2.h"
 #include "problem.h"
 
@@ -24,8 +25,9 @@ constexpr Scalar TIME_WIDENING = 0x1p-30;
 constexpr int MAX_SEPARATION_DEPTH = 6;
 
 // Whether the projections p of points [0, split) and [split, 4), at the two times, form ranges
-// farther apart than need. For finite coordinates: roots_apart keeps every sub-interval of a
-// cubic computed from a non-finite one, so none reaches here from the filter.
+// farther apart than need. For finite coordinates: roots_apart returns before any axis test for
+// a cubic that is not finite (a NaN coordinate makes b0 or b3 NaN), so none reaches here from
+// the filter.
 bool ranges_apart(const Scalar (&p)[4][2], int split, Scalar need) {
   Scalar a_lo = std::numeric_limits<Scalar>::infinity(), a_hi = -a_lo, b_lo = a_lo, b_hi = -a_lo;
   for (int i = 0; i < 4; ++i) {
@@ -209,9 +211,15 @@ std::uint64_t kept_sub_intervals(const Bernstein3& b, Scalar margin, int depth) 
 bool roots_apart(QueryKind kind, const Query& q, const CoplanarityCubic& cubic, Scalar gap, int depth,
                  Scalar cubic_margin) {
   if (depth <= 0) return false;
+  // A NaN coordinate: the portable and AVX2 box tests would read it differently (std::min
+  // skips a NaN, minpd may keep it), and nothing is apart where positions are unknown.
+  if (!(std::isfinite(cubic.b[0]) && std::isfinite(cubic.b[1]) && std::isfinite(cubic.b[2]) &&
+        std::isfinite(cubic.b[3])))
+    return false;
   // The whole step first: features whose boxes stay apart over it are apart at every root,
-  // wherever the cubic has them. The broad phase boxes whole triangles, so most of a cloth
-  // step's vertex-face and edge-edge pairs end here, without the tree of halvings.
+  // wherever the cubic has them. Many pairs the broad phase lets through never come that near
+  // (its boxes hold whole triangles, or features padded by the thickness), and end here
+  // without the tree of halvings.
   Scalar need = gap;  // then the gap and the rounding margin, for every interval below
   if (coordinate_axes_apart_inline<false>(kind, q, 0, 1, need)) return true;
   depth = std::min(depth, MAX_SEPARATION_DEPTH);
@@ -224,7 +232,7 @@ bool roots_apart(QueryKind kind, const Query& q, const CoplanarityCubic& cubic, 
   const int leaves = 1 << depth;
   if (kept == 0) return true;  // the signs varied, but the cubic does not vanish
   const std::uint64_t all = leaves == 64 ? ~std::uint64_t(0) : (std::uint64_t(1) << leaves) - 1;
-  if (kept == all) return false;  // roots may lie anywhere: the broad phase tested the whole step
+  if (kept == all) return false;  // roots may lie anywhere: the whole step's boxes were tested above
   // Each run of adjacent kept sub-intervals is tested once (a cubic has at most three roots).
   const Scalar width = Scalar(1) / Scalar(leaves);
   int runs = 0;

@@ -78,6 +78,56 @@ void check_batch_against_elementary_calls() {
 
 }  // namespace
 
+// Chunks of every length: a batch of n tests for n around the chunk size (64) and the SIMD
+// width (4), so that partial groups of four and partial chunks occur, every method, both
+// kernels, two thicknesses: every counter and every hit as the one-query calls give them.
+TEST(Batch, EveryChunkTailMatchesElementaryCalls) {
+  const ClothLikeSet set = cloth_like_set(6, 9);
+  std::vector<VertexFacePair> all_vf;
+  std::vector<EdgeEdgePair> all_ee;
+  for (const auto& p : set.vertex_face) all_vf.push_back({p[0], {p[1], p[2], p[3]}});
+  for (const auto& p : set.edge_edge) all_ee.push_back({{p[0], p[1]}, {p[2], p[3]}});
+  std::size_t offset = 0;
+  for (const bool portable : {false, true})
+    for (const std::size_t n : {1, 2, 3, 4, 5, 7, 63, 64, 65, 67, 130, 191}) {
+      offset = (offset + 977) % (all_vf.size() - 200);  // a different stretch of tests each time
+      const std::vector<VertexFacePair> vf(all_vf.begin() + offset, all_vf.begin() + offset + n);
+      const std::vector<EdgeEdgePair> ee(all_ee.begin() + offset, all_ee.begin() + offset + n);
+      const BatchInput input{set.start, set.end, vf, ee};
+      for (const Scalar thickness : {0.0, 0.01})
+        for (Method method : ALL_METHODS) {
+          SCOPED_TRACE(std::string(method_name(method)) + " n " + std::to_string(n) + " thickness " +
+                       std::to_string(thickness) + (portable ? " portable" : ""));
+          Options options;
+          options.method = method;
+          options.thickness = thickness;
+          detail::portable_kernels = portable;
+          const BatchOutput out = run_batch(input, options);
+          BatchCounters expected;
+          std::vector<std::size_t> vf_hits, ee_hits;
+          for (std::size_t i = 0; i < n; ++i) {
+            const Result a = vertex_face_ccd(gather(input, vf[i]), options);
+            const Result b = edge_edge_ccd(gather(input, ee[i]), options);
+            expected.add(a);
+            expected.add(b);
+            if (a.hit) vf_hits.push_back(i);
+            if (b.hit) ee_hits.push_back(i);
+          }
+          detail::portable_kernels = false;
+          EXPECT_EQ(out.counters.tests, 2 * n);
+          EXPECT_EQ(out.counters.culled, expected.culled);
+          EXPECT_EQ(out.counters.separated, expected.separated);
+          EXPECT_EQ(out.counters.root_solves, expected.root_solves);
+          EXPECT_EQ(out.counters.degenerate, expected.degenerate);
+          EXPECT_EQ(out.counters.hits, expected.hits);
+          ASSERT_EQ(out.vertex_face.size(), vf_hits.size());
+          ASSERT_EQ(out.edge_edge.size(), ee_hits.size());
+          for (std::size_t k = 0; k < vf_hits.size(); ++k) EXPECT_EQ(out.vertex_face[k].index, vf_hits[k]);
+          for (std::size_t k = 0; k < ee_hits.size(); ++k) EXPECT_EQ(out.edge_edge[k].index, ee_hits[k]);
+        }
+    }
+}
+
 // On this machine the AVX2 kernel where it has AVX2, and the portable one on every machine.
 TEST(Batch, MatchesElementaryCallsAndCounts) { check_batch_against_elementary_calls(); }
 

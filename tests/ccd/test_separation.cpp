@@ -234,3 +234,47 @@ TEST(Separation, FeaturesApartOverTheWholeStepNeedNoTree) {
   q.end[0] = Vec3(0.2, 0.2, 0);
   EXPECT_FALSE(detail::roots_apart(QueryKind::VertexFace, q, coplanarity_cubic(QueryKind::VertexFace, q), 0.0, 2));
 }
+
+TEST(Separation, PortableAndAvx2StagesDecideAlike) {
+  // The whole stage (roots_apart: the whole step's boxes, the tree, the runs' boxes with the
+  // margin computed once) with the portable and the AVX2 box tests, on every family and scale,
+  // at two thicknesses, and with a NaN or an infinity in one coordinate (nothing is apart
+  // there: the two box tests read a NaN differently, so the stage must not reach them); and
+  // apart_over, whose coordinates must be finite, on the finite queries.
+  if (!detail::cpu_has_avx2) GTEST_SKIP() << "no AVX2 on this machine: only the portable test runs";
+  std::size_t checked = 0, finite_checked = 0, finite_apart = 0, differences = 0, nonfinite_apart = 0;
+  for (QueryKind kind : {QueryKind::VertexFace, QueryKind::EdgeEdge})
+    for (QueryFamily family : ALL_FAMILIES)
+      for (Scalar scale : {1e-8, 1.0, 1e8}) {
+        int n = 0;
+        for (Query q : generate_queries(family, kind, 500, 41 + int(family), scale)) {
+          const int poisoned = n++ % 8;  // 0: a NaN, 1: +inf, 2: -inf, else finite
+          if (poisoned < 3) {
+            const Scalar bad = poisoned == 0 ? std::numeric_limits<Scalar>::quiet_NaN()
+                                             : (poisoned == 1 ? 1 : -1) * std::numeric_limits<Scalar>::infinity();
+            (n % 2 ? q.start : q.end)[n % 4][n % 3] = bad;
+          }
+          const CoplanarityCubic cubic = coplanarity_cubic(kind, q);
+          for (const Scalar gap : {0.0, 0.01 * scale}) {
+            detail::portable_kernels = true;
+            const bool portable = detail::roots_apart(kind, q, cubic, gap, 2, gap);
+            const bool portable_over = detail::apart_over(kind, q, 0.25, 0.5, gap);
+            detail::portable_kernels = false;
+            const bool fast = detail::roots_apart(kind, q, cubic, gap, 2, gap);
+            const bool fast_over = detail::apart_over(kind, q, 0.25, 0.5, gap);
+            ++checked;
+            differences += portable != fast;
+            if (poisoned < 3) {
+              nonfinite_apart += portable + fast;
+            } else {
+              ++finite_checked;
+              finite_apart += portable;
+              differences += portable_over != fast_over;
+            }
+          }
+        }
+      }
+  EXPECT_EQ(differences, 0u) << "of " << checked;
+  EXPECT_EQ(nonfinite_apart, 0u);
+  EXPECT_GT(finite_apart, finite_checked / 10);  // the stage does separate here
+}
