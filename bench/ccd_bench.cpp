@@ -48,35 +48,46 @@ double seconds_for(const Contender& c, const KindSet& set, std::uint64_t& sink) 
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - begin).count();
 }
 
+// The passes are interleaved: pass p times every contender on every set before pass p + 1
+// starts, so that a burst of load from another job on this shared machine falls on all of
+// them alike, not on one contender's passes (its median would move, and every ratio to it).
 std::vector<Row> measure(const std::vector<Contender>& contenders, const std::vector<KindSet>& sets, int passes) {
-  std::vector<Row> rows;
+  const auto covers = [](const Contender& c, const KindSet& set) {
+    return set.kind == QueryKind::VertexFace ? c.vertex_face : c.edge_edge;
+  };
   std::uint64_t sink = 0;
-  for (const Contender& c : contenders) {
-    Row all{c.name, "all"};
+  // seconds[c][s][p]: contender c on set s in pass p (empty where c does not cover s).
+  std::vector<std::vector<std::vector<double>>> seconds(contenders.size(), std::vector<std::vector<double>>(sets.size()));
+  for (int p = 0; p < passes; ++p)
+    for (std::size_t c = 0; c < contenders.size(); ++c)
+      for (std::size_t s = 0; s < sets.size(); ++s)
+        if (covers(contenders[c], sets[s])) seconds[c][s].push_back(seconds_for(contenders[c], sets[s], sink));
+
+  std::vector<Row> rows;
+  for (std::size_t c = 0; c < contenders.size(); ++c) {
+    const Contender& contender = contenders[c];
+    Row all{contender.name, "all"};
     std::vector<double> all_seconds(passes, 0.0);
     bool complete = true;
-    for (const KindSet& set : sets) {
-      if ((set.kind == QueryKind::VertexFace && !c.vertex_face) || (set.kind == QueryKind::EdgeEdge && !c.edge_edge)) {
+    for (std::size_t s = 0; s < sets.size(); ++s) {
+      const KindSet& set = sets[s];
+      if (!covers(contender, set)) {
         complete = false;
         continue;
       }
-      Row row{c.name, std::string(kind_name(set.kind))};
+      Row row{contender.name, std::string(kind_name(set.kind))};
       row.queries = set.queries.size();
       row.has_truth = !set.truth.empty();
       for (std::size_t i = 0; i < set.queries.size(); ++i) {
-        const bool hit = c.test(set.kind, set.queries[i]);
+        const bool hit = contender.test(set.kind, set.queries[i]);
         row.hits += hit;
         if (row.has_truth) {
           row.false_negatives += !hit && set.truth[i];
           row.false_positives += hit && !set.truth[i];
         }
       }
-      std::vector<double> seconds;
-      for (int p = 0; p < passes; ++p) {
-        seconds.push_back(seconds_for(c, set, sink));
-        all_seconds[p] += seconds.back();
-      }
-      row.ns_per_query = 1e9 * median(seconds) / row.queries;
+      for (int p = 0; p < passes; ++p) all_seconds[p] += seconds[c][s][p];
+      row.ns_per_query = 1e9 * median(seconds[c][s]) / row.queries;
       all.queries += row.queries;
       all.hits += row.hits;
       all.false_negatives += row.false_negatives;
@@ -188,7 +199,7 @@ int main(int argc, char** argv) {
   const std::vector<KindSet> cloth_sets{{QueryKind::VertexFace, gather_queries(cloth, QueryKind::VertexFace), {}},
                                         {QueryKind::EdgeEdge, gather_queries(cloth, QueryKind::EdgeEdge), {}}};
 
-  std::printf("ccd_bench: %d timed passes per method, medians; one thread.\n", passes);
+  std::printf("ccd_bench: %d timed passes per method, interleaved across methods, medians; one thread.\n", passes);
   const auto shared_rows = measure(contenders, shared, passes);
   print("(a) public ground-truth queries (" + data + ")", shared_rows);
   const auto cloth_rows = measure(contenders, cloth_sets, passes);
@@ -207,19 +218,18 @@ int main(int argc, char** argv) {
   std::printf("\n(c) the same cloth-like set through the batch entry point (run_batch, one thread)\n");
   std::printf("%-17s %10s %10s %12s\n", "method", "tests", "ns/test", "vincent is");
   double batch_ns[4] = {0, 0, 0, 0};
-  for (int m = 0; m < 4; ++m) {
-    Options options;
-    options.method = ALL_METHODS[m];
-    options.separation_depth = separation_depth;
-    std::vector<double> seconds;
-    for (int p = 0; p < passes; ++p) {
+  std::vector<double> batch_seconds[4];
+  for (int p = 0; p < passes; ++p)  // interleaved, as in measure()
+    for (int m = 0; m < 4; ++m) {
+      Options options;
+      options.method = ALL_METHODS[m];
+      options.separation_depth = separation_depth;
       const auto begin = std::chrono::steady_clock::now();
       const BatchOutput out = run_batch(batch, options, 1);
-      seconds.push_back(std::chrono::duration<double>(std::chrono::steady_clock::now() - begin).count());
+      batch_seconds[m].push_back(std::chrono::duration<double>(std::chrono::steady_clock::now() - begin).count());
       if (out.counters.tests == 0) std::puts("");
     }
-    batch_ns[m] = 1e9 * median(seconds) / batch_tests;
-  }
+  for (int m = 0; m < 4; ++m) batch_ns[m] = 1e9 * median(batch_seconds[m]) / batch_tests;
   const int vincent_index = int(std::find(ALL_METHODS.begin(), ALL_METHODS.end(), Method::Vincent) - ALL_METHODS.begin());
   for (int m = 0; m < 4; ++m)
     std::printf("%-17s %10.0f %10.1f %11.2fx\n", std::string(method_name(ALL_METHODS[m])).c_str(), batch_tests, batch_ns[m],
