@@ -10,12 +10,58 @@ using namespace drape::ccd;
 
 namespace {
 
+// run_batch on input against the one-query calls: every hit, in order, with the same fields
+// bit for bit (the batch computes the same cubics), nothing else, and every counter.
+BatchOutput expect_batch_matches_elementary_calls(const BatchInput& input, const Options& options) {
+  const BatchOutput out = run_batch(input, options);
+  BatchCounters expected;
+  const auto compare = [&](const std::vector<BatchHit>& hits, std::size_t count, auto one_query) {
+    std::size_t next = 0;
+    for (std::size_t i = 0; i < count; ++i) {
+      const Result r = one_query(i);
+      expected.add(r);
+      if (!r.hit) continue;
+      ASSERT_LT(next, hits.size()) << "hit " << i << " missing";
+      EXPECT_EQ(hits[next].index, i);
+      EXPECT_EQ(hits[next].result.toc, r.toc);
+      EXPECT_EQ(hits[next].result.params, r.params);
+      EXPECT_EQ(hits[next].result.path, r.path);
+      EXPECT_EQ(hits[next].result.root_solves, r.root_solves);
+      ++next;
+    }
+    EXPECT_EQ(next, hits.size());
+    for (const BatchHit& h : hits) EXPECT_TRUE(h.result.hit);
+  };
+  const auto& vf = input.vertex_face;
+  const auto& ee = input.edge_edge;
+  compare(out.vertex_face, vf.size(), [&](std::size_t i) { return vertex_face_ccd(gather(input, vf[i]), options); });
+  compare(out.edge_edge, ee.size(), [&](std::size_t i) { return edge_edge_ccd(gather(input, ee[i]), options); });
+  EXPECT_EQ(out.counters.tests, vf.size() + ee.size());
+  EXPECT_EQ(out.counters.tests, expected.tests);
+  EXPECT_EQ(out.counters.culled, expected.culled);
+  EXPECT_EQ(out.counters.separated, expected.separated);
+  EXPECT_EQ(out.counters.hits, expected.hits);
+  EXPECT_EQ(out.counters.root_solves, expected.root_solves);
+  EXPECT_EQ(out.counters.degenerate, expected.degenerate);
+  return out;
+}
+
+std::vector<VertexFacePair> vertex_face_pairs(const ClothLikeSet& set) {
+  std::vector<VertexFacePair> vf;
+  for (const auto& p : set.vertex_face) vf.push_back({p[0], {p[1], p[2], p[3]}});
+  return vf;
+}
+
+std::vector<EdgeEdgePair> edge_edge_pairs(const ClothLikeSet& set) {
+  std::vector<EdgeEdgePair> ee;
+  for (const auto& p : set.edge_edge) ee.push_back({{p[0], p[1]}, {p[2], p[3]}});
+  return ee;
+}
+
 void check_batch_against_elementary_calls() {
   const ClothLikeSet set = cloth_like_set(8, 42);
-  std::vector<VertexFacePair> vf;
-  std::vector<EdgeEdgePair> ee;
-  for (const auto& p : set.vertex_face) vf.push_back({p[0], {p[1], p[2], p[3]}});
-  for (const auto& p : set.edge_edge) ee.push_back({{p[0], p[1]}, {p[2], p[3]}});
+  const std::vector<VertexFacePair> vf = vertex_face_pairs(set);
+  const std::vector<EdgeEdgePair> ee = edge_edge_pairs(set);
   const BatchInput input{set.start, set.end, vf, ee};
   for (const Scalar thickness : {0.0, 0.01})
   for (Method method : ALL_METHODS) {
@@ -23,36 +69,7 @@ void check_batch_against_elementary_calls() {
     Options options;
     options.method = method;
     options.thickness = thickness;
-    const BatchOutput out = run_batch(input, options);
-    BatchCounters expected;
-    // Every hit of the one-query calls, in order, with the same fields bit for bit (the batch
-    // computes the same cubics); nothing else.
-    const auto compare = [&](const std::vector<BatchHit>& hits, std::size_t count, auto one_query) {
-      std::size_t next = 0;
-      for (std::size_t i = 0; i < count; ++i) {
-        const Result r = one_query(i);
-        expected.add(r);
-        if (!r.hit) continue;
-        ASSERT_LT(next, hits.size()) << "hit " << i << " missing";
-        EXPECT_EQ(hits[next].index, i);
-        EXPECT_EQ(hits[next].result.toc, r.toc);
-        EXPECT_EQ(hits[next].result.params, r.params);
-        EXPECT_EQ(hits[next].result.path, r.path);
-        EXPECT_EQ(hits[next].result.root_solves, r.root_solves);
-        ++next;
-      }
-      EXPECT_EQ(next, hits.size());
-      for (const BatchHit& h : hits) EXPECT_TRUE(h.result.hit);
-    };
-    compare(out.vertex_face, vf.size(), [&](std::size_t i) { return vertex_face_ccd(gather(input, vf[i]), options); });
-    compare(out.edge_edge, ee.size(), [&](std::size_t i) { return edge_edge_ccd(gather(input, ee[i]), options); });
-    EXPECT_EQ(out.counters.tests, vf.size() + ee.size());
-    EXPECT_EQ(out.counters.tests, expected.tests);
-    EXPECT_EQ(out.counters.culled, expected.culled);
-    EXPECT_EQ(out.counters.separated, expected.separated);
-    EXPECT_EQ(out.counters.hits, expected.hits);
-    EXPECT_EQ(out.counters.root_solves, expected.root_solves);
-    EXPECT_EQ(out.counters.degenerate, expected.degenerate);
+    const BatchOutput out = expect_batch_matches_elementary_calls(input, options);
     if (method == Method::Cubic) {
       EXPECT_EQ(out.counters.culled, 0u);
     }
@@ -83,10 +100,8 @@ void check_batch_against_elementary_calls() {
 // kernels, two thicknesses: every counter and every hit as the one-query calls give them.
 TEST(Batch, EveryChunkTailMatchesElementaryCalls) {
   const ClothLikeSet set = cloth_like_set(6, 9);
-  std::vector<VertexFacePair> all_vf;
-  std::vector<EdgeEdgePair> all_ee;
-  for (const auto& p : set.vertex_face) all_vf.push_back({p[0], {p[1], p[2], p[3]}});
-  for (const auto& p : set.edge_edge) all_ee.push_back({{p[0], p[1]}, {p[2], p[3]}});
+  const std::vector<VertexFacePair> all_vf = vertex_face_pairs(set);
+  const std::vector<EdgeEdgePair> all_ee = edge_edge_pairs(set);
   std::size_t offset = 0;
   for (const bool portable : {false, true})
     for (const std::size_t n : {1, 2, 3, 4, 5, 7, 63, 64, 65, 67, 130, 191}) {
@@ -102,28 +117,8 @@ TEST(Batch, EveryChunkTailMatchesElementaryCalls) {
           options.method = method;
           options.thickness = thickness;
           detail::portable_kernels = portable;
-          const BatchOutput out = run_batch(input, options);
-          BatchCounters expected;
-          std::vector<std::size_t> vf_hits, ee_hits;
-          for (std::size_t i = 0; i < n; ++i) {
-            const Result a = vertex_face_ccd(gather(input, vf[i]), options);
-            const Result b = edge_edge_ccd(gather(input, ee[i]), options);
-            expected.add(a);
-            expected.add(b);
-            if (a.hit) vf_hits.push_back(i);
-            if (b.hit) ee_hits.push_back(i);
-          }
+          expect_batch_matches_elementary_calls(input, options);
           detail::portable_kernels = false;
-          EXPECT_EQ(out.counters.tests, 2 * n);
-          EXPECT_EQ(out.counters.culled, expected.culled);
-          EXPECT_EQ(out.counters.separated, expected.separated);
-          EXPECT_EQ(out.counters.root_solves, expected.root_solves);
-          EXPECT_EQ(out.counters.degenerate, expected.degenerate);
-          EXPECT_EQ(out.counters.hits, expected.hits);
-          ASSERT_EQ(out.vertex_face.size(), vf_hits.size());
-          ASSERT_EQ(out.edge_edge.size(), ee_hits.size());
-          for (std::size_t k = 0; k < vf_hits.size(); ++k) EXPECT_EQ(out.vertex_face[k].index, vf_hits[k]);
-          for (std::size_t k = 0; k < ee_hits.size(); ++k) EXPECT_EQ(out.edge_edge[k].index, ee_hits[k]);
         }
     }
 }
