@@ -162,16 +162,21 @@ struct Lanes3 {
   __m256d x, y, z;
 };
 
-// Point k (of the pair's points in coplanarity order) of four tests, one coordinate per
+// Point `point` (of the pair's points in query order) of four tests, one coordinate per
 // register; the indices read straight from the pairs.
-template <QueryKind kind, int k, class Pair>
-DRAPE_AVX2 Lanes3 load4(const Vec3* base, const Pair* const (&pair)[4]) {
-  constexpr int point = coplanarity_order(kind)[k];
+template <class Pair>
+DRAPE_AVX2 Lanes3 load4_point(const Vec3* base, const Pair* const (&pair)[4], int point) {
   const double *p0 = base[points(*pair[0])[point]].data(), *p1 = base[points(*pair[1])[point]].data(),
                *p2 = base[points(*pair[2])[point]].data(), *p3 = base[points(*pair[3])[point]].data();
   const __m256d xy02 = _mm256_insertf128_pd(_mm256_castpd128_pd256(_mm_loadu_pd(p0)), _mm_loadu_pd(p2), 1);
   const __m256d xy13 = _mm256_insertf128_pd(_mm256_castpd128_pd256(_mm_loadu_pd(p1)), _mm_loadu_pd(p3), 1);
   return {_mm256_unpacklo_pd(xy02, xy13), _mm256_unpackhi_pd(xy02, xy13), _mm256_set_pd(p3[2], p2[2], p1[2], p0[2])};
+}
+
+// Point k in coplanarity order.
+template <QueryKind kind, int k, class Pair>
+DRAPE_AVX2 Lanes3 load4(const Vec3* base, const Pair* const (&pair)[4]) {
+  return load4_point(base, pair, coplanarity_order(kind)[k]);
 }
 
 DRAPE_AVX2 Lanes3 sub4(const Lanes3& a, const Lanes3& b) {
@@ -246,6 +251,112 @@ __attribute__((target("avx2"))) void gather_cubics_avx2(const BatchInput& input,
   c.certainly_apart = apart_bits & chunk_bits(n);
 }
 
+// A test the chunk's decisions left (not culled by the filter, not certainly apart for
+// conservative), with its cubic: run a few chunks' worth at a time.
+struct Left {
+  std::size_t index;
+  CoplanarityCubic cubic;
+};
+constexpr int LEFT_MAX = 64;
+
+// Ranges [a_lo, a_hi] and [b_lo, b_hi] farther apart than need, lane by lane.
+DRAPE_AVX2 __m256d apart4(__m256d a_lo, __m256d a_hi, __m256d b_lo, __m256d b_hi, __m256d need) {
+  return _mm256_or_pd(_mm256_cmp_pd(_mm256_sub_pd(b_lo, a_hi), need, _CMP_GT_OQ),
+                      _mm256_cmp_pd(_mm256_sub_pd(a_lo, b_hi), need, _CMP_GT_OQ));
+}
+
+// The box of point `point` of four tests over the whole step, and largest raised to its
+// coordinates' magnitudes (as boxes_apart_avx2 in separation.cpp).
+template <class Pair>
+DRAPE_AVX2 void point_box4(const BatchInput& input, const Pair* const (&pair)[4], int point, Lanes3& lo, Lanes3& hi,
+                           __m256d& largest) {
+  const Lanes3 s = load4_point(input.start.data(), pair, point), e = load4_point(input.end.data(), pair, point);
+  const Lanes3 x1 = {_mm256_add_pd(s.x, _mm256_sub_pd(e.x, s.x)), _mm256_add_pd(s.y, _mm256_sub_pd(e.y, s.y)),
+                     _mm256_add_pd(s.z, _mm256_sub_pd(e.z, s.z))};
+  lo = {min4(s.x, x1.x), min4(s.y, x1.y), min4(s.z, x1.z)};
+  hi = {max4(s.x, x1.x), max4(s.y, x1.y), max4(s.z, x1.z)};
+  largest = max4(largest, max4(max4(max4(abs4(s.x), abs4(e.x)), max4(abs4(s.y), abs4(e.y))), max4(abs4(s.z), abs4(e.z))));
+}
+
+// [box_lo, box_hi] widened to hold [lo, hi].
+DRAPE_AVX2 void merge_box4(Lanes3& box_lo, Lanes3& box_hi, const Lanes3& lo, const Lanes3& hi) {
+  box_lo = {min4(box_lo.x, lo.x), min4(box_lo.y, lo.y), min4(box_lo.z, lo.z)};
+  box_hi = {max4(box_hi.x, hi.x), max4(box_hi.y, hi.y), max4(box_hi.z, hi.z)};
+}
+
+// The separation stage's first question for vincent (detail::coordinate_axes_apart over [0, 1]
+// with the gap detail::contact_distance), four tests at a time: bit j set when the boxes of the
+// features of left[j] over the whole step are apart, and need[j] the gap plus the rounding
+// margin. The one-query AVX2 box test with a test per lane instead of a coordinate per lane,
+// the same decisions and need: the positions at t = 0 and t = 1 are start and start + motion
+// (what start + t * motion gives there, but for the sign of a zero, which no decision reads),
+// the same minima and maxima. Only read for tests that pass detail::stage_runs (finite
+// coordinates). need has room for count rounded up to four.
+template <QueryKind kind, class Pair>
+__attribute__((target("avx2"))) std::uint64_t whole_step_apart_avx2(const BatchInput& input, const Pair* pairs,
+                                                                    const Left* left, int count,
+                                                                    const Options& options, Scalar* need) {
+  constexpr int split = kind == QueryKind::VertexFace ? 1 : 2;  // points [0, split) are the first feature
+  const __m256d thickness = _mm256_set1_pd(options.thickness), tolerance = _mm256_set1_pd(options.contact_tolerance);
+  const __m256d margin = _mm256_set1_pd(detail::PROJECTION_ERROR_FACTOR * UNIT_ROUNDOFF);
+  std::uint64_t apart_bits = 0;
+  for (int j = 0; j < count; j += 4) {
+    // Four tests (a tail repeats the last one; its bits are dropped below).
+    const Left* const test[4] = {left + j, left + std::min(j + 1, count - 1), left + std::min(j + 2, count - 1),
+                                 left + std::min(j + 3, count - 1)};
+    const Pair* const pair[4] = {pairs + test[0]->index, pairs + test[1]->index, pairs + test[2]->index,
+                                 pairs + test[3]->index};
+    // Point 0 is always the first feature's, point 3 the second's; point 1 is the vertex-face
+    // test's triangle's, the edge-edge test's first edge's.
+    __m256d largest = _mm256_setzero_pd();
+    Lanes3 a_lo, a_hi, b_lo, b_hi, lo, hi;
+    point_box4(input, pair, 0, a_lo, a_hi, largest);
+    point_box4(input, pair, 3, b_lo, b_hi, largest);
+    point_box4(input, pair, 1, lo, hi, largest);
+    merge_box4(split == 1 ? b_lo : a_lo, split == 1 ? b_hi : a_hi, lo, hi);
+    point_box4(input, pair, 2, lo, hi, largest);
+    merge_box4(b_lo, b_hi, lo, hi);
+    const __m256d extent = _mm256_set_pd(test[3]->cubic.extent, test[2]->cubic.extent, test[1]->cubic.extent,
+                                         test[0]->cubic.extent);
+    const __m256d need4 =
+        _mm256_add_pd(_mm256_add_pd(thickness, _mm256_mul_pd(tolerance, extent)), _mm256_mul_pd(margin, largest));
+    _mm256_storeu_pd(need + j, need4);
+    const __m256d apart = _mm256_or_pd(_mm256_or_pd(apart4(a_lo.x, a_hi.x, b_lo.x, b_hi.x, need4),
+                                                    apart4(a_lo.y, a_hi.y, b_lo.y, b_hi.y, need4)),
+                                       apart4(a_lo.z, a_hi.z, b_lo.z, b_hi.z, need4));
+    apart_bits |= std::uint64_t(_mm256_movemask_pd(apart)) << j;
+  }
+  return apart_bits & chunk_bits(std::size_t(count));
+}
+
+// The tests the chunks' decisions left, in order: the full method on the gathered query. For
+// vincent, the separation stage's first question is asked here four tests at a time, and the
+// tests it separates need nothing else.
+template <QueryKind kind, class Pair>
+void run_left(const BatchInput& input, std::span<const Pair> pairs, const Options& options, const Left* left,
+              int count, BatchCounters& counters, std::vector<BatchHit>& hits) {
+  const bool whole_step_first =
+      options.method == Method::Vincent && options.separation_depth > 0 && detail::avx2_enabled();
+  alignas(32) Scalar need[LEFT_MAX + 3];
+  const std::uint64_t apart =
+      whole_step_first ? whole_step_apart_avx2<kind>(input, pairs.data(), left, count, options, need) : 0;
+  for (int j = 0; j < count; ++j) {
+    const CoplanarityCubic& cubic = left[j].cubic;
+    Scalar whole_step_need = -1;  // not asked
+    if (whole_step_first && detail::vincent_entry(cubic) == detail::VincentEntry::Stage &&
+        detail::stage_runs(cubic, options.separation_depth)) {
+      if ((apart >> j) & 1) {
+        counters.add(Result{.path = Path::Separated});  // what roots_apart decides there
+        continue;
+      }
+      whole_step_need = need[j];
+    }
+    const Result result = detail::run_unculled(kind, gather(input, pairs[left[j].index]), options, cubic, whole_step_need);
+    counters.add(result);
+    if (result.hit) hits.push_back({left[j].index, result});
+  }
+}
+
 // The tests [begin, end) of one kind: cubics a chunk at a time; dnf and vincent decide the
 // culled ones from the cubic alone, everything else runs the full method on the gathered query.
 // Appends the hits to hits and returns the counters of the range.
@@ -259,6 +370,8 @@ BatchCounters run_range(const BatchInput& input, std::span<const Pair> pairs, co
   // cubic is certainly nonzero on the whole step: a miss, counted here as the method counts it.
   const bool conservative_first = options.method == Method::Conservative && options.thickness == 0;
   ChunkCubics c;
+  Left left[LEFT_MAX];
+  int left_count = 0;
   for (std::size_t first = begin; first < end; first += CHUNK) {
     const std::size_t n = std::min(CHUNK, end - first);
     if (!detail::avx2_enabled()) {
@@ -268,28 +381,28 @@ BatchCounters run_range(const BatchInput& input, std::span<const Pair> pairs, co
     } else {
       gather_cubics_avx2<kind, false>(input, pairs.data() + first, n, c);
     }
-    // The tests that end with the chunk's decisions, counted at once; the others one by one,
-    // in order.
-    std::uint64_t left = chunk_bits(n);
+    // The tests that end with the chunk's decisions, counted at once; the others kept, in
+    // order, and run when a chunk's worth are waiting.
     const std::uint64_t ended = filter ? c.culled : (conservative_first ? c.certainly_apart : 0);
     const auto ended_count = static_cast<std::uint64_t>(__builtin_popcountll(ended));
     counters.tests += ended_count;
     counters.culled += ended_count;
     if (conservative_first) counters.root_solves += ended_count;  // a miss, one interval examined
-    left &= ~ended;
-    while (left != 0) {
-      const int i = __builtin_ctzll(left);
-      left &= left - 1;
-      CoplanarityCubic cubic;
-      for (int k = 0; k < 4; ++k) cubic.b[k] = c.coefficient[k][i];
-      cubic.error = c.error[i];
-      cubic.extent = c.extent[i];
-      assert(bool((c.culled >> i) & 1) == filter_culls(cubic));
-      const Result result = detail::run_unculled(kind, gather(input, pairs[first + i]), options, cubic);
-      counters.add(result);
-      if (result.hit) hits.push_back({first + i, result});
+    for (std::uint64_t rest = chunk_bits(n) & ~ended; rest != 0; rest &= rest - 1) {
+      const int i = __builtin_ctzll(rest);
+      Left& l = left[left_count++];
+      l.index = first + i;
+      for (int k = 0; k < 4; ++k) l.cubic.b[k] = c.coefficient[k][i];
+      l.cubic.error = c.error[i];
+      l.cubic.extent = c.extent[i];
+      assert(bool((c.culled >> i) & 1) == filter_culls(l.cubic));
+      if (left_count == LEFT_MAX) {
+        run_left<kind>(input, pairs, options, left, left_count, counters, hits);
+        left_count = 0;
+      }
     }
   }
+  if (left_count > 0) run_left<kind>(input, pairs, options, left, left_count, counters, hits);
   return counters;
 }
 

@@ -33,7 +33,7 @@ namespace {
 using detail::Problem;
 
 // How close the features must come to touch: the thickness plus the contact tolerance.
-Scalar contact_distance(const Problem& p) { return p.options.thickness + p.options.contact_tolerance * p.cubic.extent; }
+Scalar contact_distance(const Problem& p) { return detail::contact_distance(p.options, p.cubic); }
 
 // The inside test of the root-finding methods at a candidate time: the closest points of the
 // features there (the standard formulas) and their distance against the tolerance.
@@ -67,10 +67,8 @@ Result degenerate_path(const Problem& p) {
 // ---------------------------------------------------------------------------------------------
 // Cubic: all real roots by the closed form, inside test at each in increasing order.
 
-// A root of the cubic within its rounding error of an end of the step: the features may touch
-// right at t = 0 or t = 1 (resting contact), whatever sign rounding gave the end coefficient.
-bool root_possible_at_start(const Problem& p) { return std::abs(p.cubic.b[0]) <= p.cubic.error; }
-bool root_possible_at_end(const Problem& p) { return std::abs(p.cubic.b[3]) <= p.cubic.error; }
+bool root_possible_at_start(const Problem& p) { return detail::root_possible_at_start(p.cubic); }
+bool root_possible_at_end(const Problem& p) { return detail::root_possible_at_end(p.cubic); }
 
 Result cubic_method(const Problem& p) {
   if (cubic_poorly_resolved(p.cubic)) return degenerate_path(p);
@@ -102,15 +100,20 @@ Result dnf_method(const Problem& p) {
 
 Result vincent_method(const Problem& p) {
   const Bernstein3& b = p.cubic.b;
-  // Unreliable roots first, as cubic does: the filter must not cull what cubic would find.
-  if (cubic_poorly_resolved(p.cubic)) return degenerate_path(p);
-  // (The sign cull came first, in one_query or elementary_ccd.)
+  switch (detail::vincent_entry(p.cubic)) {
+    case detail::VincentEntry::Degenerate: return degenerate_path(p);
+    case detail::VincentEntry::Culled: return Result{};
+    case detail::VincentEntry::Stage: break;
+  }
   const int variations = sign_variations(b);
-  if (variations == 0 && !root_possible_at_start(p) && !root_possible_at_end(p)) return Result{};  // culled
   // The separation stage: wherever the cubic may vanish, the features are apart. That covers
   // the ends too: a root within rounding of t = 0 or t = 1 lies in the first or last kept
   // interval, so the inside tests below would fail there as well.
-  if (detail::roots_apart(p.kind, p.query, p.cubic, contact_distance(p), p.options.separation_depth)) {
+  const bool apart =
+      p.whole_step_need >= 0
+          ? detail::roots_apart_within(p.kind, p.query, p.cubic, p.whole_step_need, p.options.separation_depth)
+          : detail::roots_apart(p.kind, p.query, p.cubic, contact_distance(p), p.options.separation_depth);
+  if (apart) {
     Result apart;
     apart.path = Path::Separated;
     return apart;
@@ -177,8 +180,8 @@ bool filters(const Options& options) { return options.method == Method::Vincent 
 }  // namespace
 
 Result detail::run_unculled(QueryKind kind, const Query& query, const Options& options,
-                            const CoplanarityCubic& cubic) {
-  const Problem p{kind, query, options, cubic};
+                            const CoplanarityCubic& cubic, Scalar whole_step_need) {
+  const Problem p{kind, query, options, cubic, whole_step_need};
   switch (options.method) {
     case Method::Cubic: return cubic_method(p);
     case Method::Dnf: return dnf_method(p);

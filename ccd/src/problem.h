@@ -16,6 +16,9 @@ struct Problem {
   const Query& query;
   const Options& options;
   CoplanarityCubic cubic;
+  /// Vincent: when the caller ran the separation stage's first question (the whole step's
+  /// boxes, not apart), the need it computed there; negative when it did not.
+  Scalar whole_step_need = -1;
 };
 
 /// Positions of the four points at time t, in precision T.
@@ -45,6 +48,13 @@ Proximity<T> proximity_at(QueryKind kind, const Query& q, T t) {
                                                : segment_segment_distance<T>(x[0], x[1], x[2], x[3]);
   return Proximity<T>{d.distance, d.error, Vec2(Scalar(d.param0), Scalar(d.param1))};
 }
+
+// Rounding of a projected extent, in units of u times the largest coordinate times the axis's
+// 1-norm: the position at a time (about 4 roundings of values up to twice the coordinate
+// bound), the dot product (3 more), the subtraction of two projections, and the rounding of
+// the distance the root-finding methods compute at a root (DISTANCE_ERROR_FACTOR of the
+// conservative search, 32). 64 covers them with a factor of two to spare.
+inline constexpr Scalar PROJECTION_ERROR_FACTOR = 64.0;
 
 inline Scalar max_abs_coordinate(const Query& q) {
   Scalar m = 0;
@@ -87,6 +97,28 @@ std::uint64_t kept_sub_intervals(const Bernstein3& b, Scalar margin, int depth);
 bool roots_apart(QueryKind kind, const Query& q, const CoplanarityCubic& cubic, Scalar gap, int depth,
                  Scalar cubic_margin = 0);
 
+/// roots_apart after the whole step's boxes were found not apart (stage_runs held): the tree of
+/// halvings and the runs' axis tests, with need the gap plus the rounding margin that
+/// coordinate_axes_apart returned for the whole step. separation.cpp.
+bool roots_apart_within(QueryKind kind, const Query& q, const CoplanarityCubic& cubic, Scalar need, int depth,
+                        Scalar cubic_margin = 0);
+
+/// Whether roots_apart goes past its first checks to the whole step's boxes: depth > 0 and a
+/// finite cubic (a NaN or infinite coordinate makes b0 or b3 NaN or infinite, so every
+/// coordinate of a query that passes is finite). A NaN coordinate would otherwise reach the
+/// box tests, which the portable and AVX2 code read differently (std::min skips a NaN, minpd
+/// may keep it), and nothing is apart where positions are unknown.
+inline bool stage_runs(const CoplanarityCubic& cubic, int depth) {
+  return depth > 0 && std::isfinite(cubic.b[0]) && std::isfinite(cubic.b[1]) && std::isfinite(cubic.b[2]) &&
+         std::isfinite(cubic.b[3]);
+}
+
+/// The separation stage's gap for vincent (and the root finders' inside test): the thickness
+/// plus the contact tolerance times the query's extent.
+inline Scalar contact_distance(const Options& options, const CoplanarityCubic& cubic) {
+  return options.thickness + options.contact_tolerance * cubic.extent;
+}
+
 /// coplanarity_cubic(kind, query) bit for bit, computed with AVX2: only where cpu_has_avx2
 /// (elsewhere an illegal instruction). coplanarity.cpp.
 CoplanarityCubic vertex_face_cubic_avx2(const Query& query);
@@ -115,10 +147,30 @@ inline bool query_culled(QueryKind kind, const Query& query, CoplanarityCubic& c
   return filter_culls(cubic);
 }
 
+/// A root of the cubic within its rounding error of an end of the step: the features may touch
+/// right at t = 0 or t = 1 (resting contact), whatever sign rounding gave the end coefficient.
+inline bool root_possible_at_start(const CoplanarityCubic& c) { return std::abs(c.b[0]) <= c.error; }
+inline bool root_possible_at_end(const CoplanarityCubic& c) { return std::abs(c.b[3]) <= c.error; }
+
+/// Where vincent goes with a cubic the sign cull left: the degenerate path when the cubic is
+/// poorly resolved (as cubic does), culled when no sign varies and no root is possible at
+/// either end of the step, else the separation stage (roots_apart). elementary.cpp.
+enum class VincentEntry { Degenerate, Culled, Stage };
+inline VincentEntry vincent_entry(const CoplanarityCubic& cubic) {
+  // Unreliable roots first, as cubic does: the filter must not cull what cubic would find.
+  if (cubic_poorly_resolved(cubic)) return VincentEntry::Degenerate;
+  // (The sign cull came first, in one_query, elementary_ccd or the batch.)
+  if (sign_variations(cubic.b) == 0 && !root_possible_at_start(cubic) && !root_possible_at_end(cubic))
+    return VincentEntry::Culled;
+  return VincentEntry::Stage;
+}
+
 /// elementary_ccd with the cubic, for a test the filter does not cull (dnf and vincent: the
 /// caller has checked filter_culls) or whose method has no filter: the batch, whose kernel
 /// decided the cull already. elementary.cpp.
-Result run_unculled(QueryKind kind, const Query& query, const Options& options, const CoplanarityCubic& cubic);
+/// whole_step_need: see Problem.
+Result run_unculled(QueryKind kind, const Query& query, const Options& options, const CoplanarityCubic& cubic,
+                    Scalar whole_step_need = -1);
 
 /// The conservative method, and the degenerate path of the others (use_cubic = false: the
 /// cubic says nothing, decide by distance alone).

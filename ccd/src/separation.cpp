@@ -9,13 +9,6 @@ namespace drape::ccd::detail {
 
 namespace {
 
-// Rounding of a projected extent, in units of u times the largest coordinate times the axis's
-// 1-norm: the position at a time (about 4 roundings of values up to twice the coordinate
-// bound), the dot product (3 more), the subtraction of two projections, and the rounding of
-// the distance the root-finding methods compute at a root (DISTANCE_ERROR_FACTOR of the
-// conservative search, 32). 64 covers them with a factor of two to spare.
-constexpr Scalar PROJECTION_ERROR_FACTOR = 64.0;
-
 // Each sub-interval's time range is widened by this much on both sides before the axis test:
 // the root-finding methods report a root within their tolerance (1e-13 of the step) of where
 // their computed cubic changes sign, which may lie just across a sub-interval's end.
@@ -210,18 +203,18 @@ std::uint64_t kept_sub_intervals(const Bernstein3& b, Scalar margin, int depth) 
 
 bool roots_apart(QueryKind kind, const Query& q, const CoplanarityCubic& cubic, Scalar gap, int depth,
                  Scalar cubic_margin) {
-  if (depth <= 0) return false;
-  // A NaN coordinate: the portable and AVX2 box tests would read it differently (std::min
-  // skips a NaN, minpd may keep it), and nothing is apart where positions are unknown.
-  if (!(std::isfinite(cubic.b[0]) && std::isfinite(cubic.b[1]) && std::isfinite(cubic.b[2]) &&
-        std::isfinite(cubic.b[3])))
-    return false;
+  if (!stage_runs(cubic, depth)) return false;
   // The whole step first: features whose boxes stay apart over it are apart at every root,
   // wherever the cubic has them. Many pairs the broad phase lets through never come that near
   // (its boxes hold whole triangles, or features padded by the thickness), and end here
   // without the tree of halvings.
   Scalar need = gap;  // then the gap and the rounding margin, for every interval below
   if (coordinate_axes_apart_inline<false>(kind, q, 0, 1, need)) return true;
+  return roots_apart_within(kind, q, cubic, need, depth, cubic_margin);
+}
+
+bool roots_apart_within(QueryKind kind, const Query& q, const CoplanarityCubic& cubic, Scalar need, int depth,
+                        Scalar cubic_margin) {
   depth = std::min(depth, MAX_SEPARATION_DEPTH);
   // A sub-interval holds no root of the exact or the computed cubic, and no sign change of a
   // root finder's evaluation of it, when its coefficients exceed this in one sign: twice the

@@ -131,3 +131,52 @@ TEST(Batch, PortableKernelMatchesElementaryCallsAndCounts) {
   check_batch_against_elementary_calls();
   detail::portable_kernels = false;
 }
+
+// Features that become coplanar at mid-step a distance d apart along one coordinate axis, so
+// that their boxes over the whole step are d apart along it: a contact for d within the
+// thickness, apart beyond it. The batch asks vincent's first question of the separation stage
+// itself (four tests at a time, on every axis); it must keep the contacts and agree with the
+// one-query calls on every test, on each axis and for each feature on either side.
+TEST(Batch, WholeStepBoxesKeepContactsWithinTheThickness) {
+  constexpr Scalar thickness = 0.01;
+  std::vector<Vec3> start, end;
+  std::vector<VertexFacePair> vf;
+  std::vector<EdgeEdgePair> ee;
+  const auto point = [&](Vec3 s, Vec3 e, int axis) {
+    // Coordinates rotated so that the offset lies along axis (0: x, 1: y, 2: z).
+    const auto rotate = [axis](const Vec3& p) { return Vec3(p[(3 - axis) % 3], p[(4 - axis) % 3], p[(5 - axis) % 3]); };
+    start.push_back(rotate(s));
+    end.push_back(rotate(e));
+    return static_cast<std::int32_t>(start.size() - 1);
+  };
+  std::size_t near = 0;
+  for (int axis = 0; axis < 3; ++axis)
+    for (const Scalar side : {-1.0, 1.0})
+      for (const Scalar ratio : {0.1, 0.5, 0.9, 0.99, 1.01, 1.1, 2.0, 5.0}) {
+        const Scalar d = ratio * thickness;
+        near += ratio < 1;
+        // A vertex falling through the plane z = 0 at t = 0.5, d beyond the triangle's edge
+        // x = 0 (side -1) or its corner x = 1 (side 1), along x.
+        const Scalar x = side < 0 ? -d : 1 + d;
+        const std::int32_t v = point({x, 0.0, 0.5}, {x, 0.0, -0.5}, axis);
+        const std::int32_t a = point({0, -0.5, 0}, {0, -0.5, 0}, axis), b = point({1, 0, 0}, {1, 0, 0}, axis),
+                           c = point({0, 0.5, 0}, {0, 0.5, 0}, axis);
+        vf.push_back({v, {a, b, c}});
+        // An edge along y falling through z = 0 at t = 0.5, d beyond the end of an edge along x.
+        const std::int32_t e0 = point({0, 0, 0}, {0, 0, 0}, axis), e1 = point({1, 0, 0}, {1, 0, 0}, axis);
+        const Scalar ex = side < 0 ? -d : 1 + d;
+        const std::int32_t f0 = point({ex, -0.5, 0.5}, {ex, -0.5, -0.5}, axis),
+                           f1 = point({ex, 0.5, 0.5}, {ex, 0.5, -0.5}, axis);
+        ee.push_back({{e0, e1}, {f0, f1}});
+        ee.push_back({{f0, f1}, {e0, e1}});
+      }
+  const BatchInput input{start, end, vf, ee};
+  Options options;
+  options.method = Method::Vincent;
+  options.thickness = thickness;
+  const BatchOutput out = expect_batch_matches_elementary_calls(input, options);
+  // Every pair within the thickness touches; every pair beyond it is separated.
+  EXPECT_EQ(out.vertex_face.size(), near);
+  EXPECT_EQ(out.edge_edge.size(), 2 * near);
+  EXPECT_EQ(out.counters.separated, out.counters.tests - 3 * near);
+}
