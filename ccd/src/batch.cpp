@@ -72,9 +72,10 @@ struct ChunkCubics {
   alignas(64) Scalar coefficient[4][CHUNK], error[CHUNK], extent[CHUNK];
   static_assert(CHUNK == 64, "one bit per test of a chunk in a 64-bit mask");
   std::uint64_t culled = 0;  // bit i: filter_culls of test i's cubic
-  // Bit i: the conservative method's first question at zero thickness: resolved, and every
-  // coefficient beyond its error with one sign (certainly_nonzero on the whole step). Only
-  // computed where asked for (the AVX2 path's APART).
+  // Bit i: the conservative method's first question: resolved, and every coefficient beyond
+  // its error plus the thickness's share of the cubic with one sign (certainly_nonzero on the
+  // whole step). Only computed where asked for: the AVX2 path's APART, at any thickness; the
+  // portable path always, but for zero thickness only (the error alone).
   std::uint64_t certainly_apart = 0;
 };
 
@@ -198,11 +199,17 @@ DRAPE_AVX2 __m256d l1_4(const Lanes3& s, const Lanes3& e) {
               _mm256_add_pd(_mm256_add_pd(abs4(e.x), abs4(e.y)), abs4(e.z)));
 }
 
+DRAPE_AVX2 __m256d norm4(const Lanes3& u) {
+  return _mm256_sqrt_pd(_mm256_add_pd(_mm256_add_pd(_mm256_mul_pd(u.x, u.x), _mm256_mul_pd(u.y, u.y)),
+                                      _mm256_mul_pd(u.z, u.z)));
+}
+
 // Tests [0, n) of pairs, n <= CHUNK, into c (the arrays a0..c1 are not filled); with APART
-// also c.certainly_apart (the conservative method's first question), else it stays 0.
+// also c.certainly_apart (the conservative method's first question, with the thickness),
+// else it stays 0.
 template <QueryKind kind, bool APART, class Pair>
 __attribute__((target("avx2"))) void gather_cubics_avx2(const BatchInput& input, const Pair* pairs, std::size_t n,
-                                                        ChunkCubics& c) {
+                                                        Scalar thickness, ChunkCubics& c) {
   constexpr Scalar unit_roundoff = std::numeric_limits<Scalar>::epsilon() / 2;
   const __m256d zero = _mm256_setzero_pd();
   const Vec3 *start = input.start.data(), *end = input.end.data();
@@ -213,8 +220,10 @@ __attribute__((target("avx2"))) void gather_cubics_avx2(const BatchInput& input,
                                  pairs + std::min(i + 3, n - 1)};
     const Lanes3 s1 = load4<kind, 0>(start, pair), e1 = load4<kind, 0>(end, pair);
     const Lanes3 A0 = sub4(load4<kind, 1>(start, pair), s1), A1 = sub4(load4<kind, 1>(end, pair), e1);
-    const Lanes3 B0 = sub4(load4<kind, 2>(start, pair), s1), B1 = sub4(load4<kind, 2>(end, pair), e1);
-    const Lanes3 C0 = sub4(load4<kind, 3>(start, pair), s1), C1 = sub4(load4<kind, 3>(end, pair), e1);
+    const Lanes3 s3 = load4<kind, 2>(start, pair), e3 = load4<kind, 2>(end, pair);
+    const Lanes3 s4 = load4<kind, 3>(start, pair), e4 = load4<kind, 3>(end, pair);
+    const Lanes3 B0 = sub4(s3, s1), B1 = sub4(e3, e1);
+    const Lanes3 C0 = sub4(s4, s1), C1 = sub4(e4, e1);
     const Lanes3 b0c0 = cross4(B0, C0), b1c0 = cross4(B1, C0), b0c1 = cross4(B0, C1), b1c1 = cross4(B1, C1);
     const __m256d three = _mm256_set1_pd(3.0);
     const __m256d k0 = dot4(A0, b0c0);
@@ -237,13 +246,26 @@ __attribute__((target("avx2"))) void gather_cubics_avx2(const BatchInput& input,
     const __m256d ends_clear = _mm256_cmp_pd(min4(abs4(k0), abs4(k3)), e, _CMP_GT_OQ);
     culled_bits |= std::uint64_t(_mm256_movemask_pd(_mm256_and_pd(_mm256_and_pd(resolved, one_sign), ends_clear))) << i;
     if constexpr (APART) {
-      const __m256d minus_e = _mm256_sub_pd(zero, e);
+      // The margin: the error, plus with a thickness conservative.cpp's thickness_to_cubic
+      // lane by lane (the longer of each of two edges at the two ends of the step: the vertex-
+      // face test's triangle edges from its first vertex, A and B; the edge-edge test's edges,
+      // A and x4 - x3 from the points themselves, as the scalar code subtracts them).
+      __m256d m = e;
+      if (thickness > 0) {
+        const __m256d first = max4(norm4(A0), norm4(A1));
+        const __m256d second = kind == QueryKind::VertexFace ? max4(norm4(B0), norm4(B1))
+                                                             : max4(norm4(sub4(s4, s3)), norm4(sub4(e4, e3)));
+        const __m256d share = _mm256_mul_pd(_mm256_mul_pd(_mm256_set1_pd(thickness), _mm256_mul_pd(first, second)),
+                                            _mm256_set1_pd(1 + 16 * UNIT_ROUNDOFF));
+        m = _mm256_add_pd(e, share);
+      }
+      const __m256d minus_m = _mm256_sub_pd(zero, m);
       const __m256d above =
-          _mm256_and_pd(_mm256_and_pd(_mm256_cmp_pd(k0, e, _CMP_GT_OQ), _mm256_cmp_pd(k1, e, _CMP_GT_OQ)),
-                        _mm256_and_pd(_mm256_cmp_pd(k2, e, _CMP_GT_OQ), _mm256_cmp_pd(k3, e, _CMP_GT_OQ)));
+          _mm256_and_pd(_mm256_and_pd(_mm256_cmp_pd(k0, m, _CMP_GT_OQ), _mm256_cmp_pd(k1, m, _CMP_GT_OQ)),
+                        _mm256_and_pd(_mm256_cmp_pd(k2, m, _CMP_GT_OQ), _mm256_cmp_pd(k3, m, _CMP_GT_OQ)));
       const __m256d below =
-          _mm256_and_pd(_mm256_and_pd(_mm256_cmp_pd(k0, minus_e, _CMP_LT_OQ), _mm256_cmp_pd(k1, minus_e, _CMP_LT_OQ)),
-                        _mm256_and_pd(_mm256_cmp_pd(k2, minus_e, _CMP_LT_OQ), _mm256_cmp_pd(k3, minus_e, _CMP_LT_OQ)));
+          _mm256_and_pd(_mm256_and_pd(_mm256_cmp_pd(k0, minus_m, _CMP_LT_OQ), _mm256_cmp_pd(k1, minus_m, _CMP_LT_OQ)),
+                        _mm256_and_pd(_mm256_cmp_pd(k2, minus_m, _CMP_LT_OQ), _mm256_cmp_pd(k3, minus_m, _CMP_LT_OQ)));
       apart_bits |= std::uint64_t(_mm256_movemask_pd(_mm256_and_pd(resolved, _mm256_or_pd(above, below)))) << i;
     }
   }
@@ -366,9 +388,11 @@ BatchCounters run_range(const BatchInput& input, std::span<const Pair> pairs, co
   BatchCounters counters;
   constexpr std::array<int, 4> order = coplanarity_order(kind);
   const bool filter = options.method == Method::Dnf || options.method == Method::Vincent;
-  // The conservative method ends a test at its first question when, at zero thickness, the
-  // cubic is certainly nonzero on the whole step: a miss, counted here as the method counts it.
-  const bool conservative_first = options.method == Method::Conservative && options.thickness == 0;
+  // The conservative method ends a test at its first question when the cubic is certainly
+  // farther from zero over the whole step than the thickness lets it come: a miss, counted here
+  // as the method counts it. The portable kernel asks it at zero thickness only.
+  const bool conservative_first =
+      options.method == Method::Conservative && (options.thickness == 0 || detail::avx2_enabled());
   ChunkCubics c;
   Left left[LEFT_MAX];
   int left_count = 0;
@@ -377,9 +401,9 @@ BatchCounters run_range(const BatchInput& input, std::span<const Pair> pairs, co
     if (!detail::avx2_enabled()) {
       gather_cubics(input, pairs.data() + first, n, order, c);
     } else if (conservative_first) {
-      gather_cubics_avx2<kind, true>(input, pairs.data() + first, n, c);
+      gather_cubics_avx2<kind, true>(input, pairs.data() + first, n, options.thickness, c);
     } else {
-      gather_cubics_avx2<kind, false>(input, pairs.data() + first, n, c);
+      gather_cubics_avx2<kind, false>(input, pairs.data() + first, n, options.thickness, c);
     }
     // The tests that end with the chunk's decisions, counted at once; the others kept, in
     // order, and run when a chunk's worth are waiting.
