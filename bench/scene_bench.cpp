@@ -8,6 +8,7 @@
 //                     [--dump-ccd DIR [--dump-frame F] [--dump-limit Q]]
 #include <CLI/CLI.hpp>
 #include <algorithm>
+#include <array>
 #include <chrono>
 #include <cstdio>
 #include <filesystem>
@@ -58,31 +59,45 @@ struct MethodRun {
   std::vector<bool> hits;  // every test of the frame, batch after batch, vertex-face first
 };
 
-MethodRun time_method(const Frame& frame, ccd::Method method, int passes, int separation_depth) {
-  ccd::Options options;
-  options.method = method;
-  options.separation_depth = separation_depth;  // thickness 0: exact contact, as the simulation's pipeline asks
-  MethodRun run;
-  std::vector<double> ms;
+// One timed configuration: a method and its separation depth.
+struct Timed {
+  ccd::Method method;
+  int separation_depth;
+};
+
+// The frame's whole narrow phase for each configuration, the passes interleaved across them
+// (pass p of every configuration before pass p + 1 of any): a burst of load from another job
+// on a shared machine then falls on one pass of several configurations, which the median drops,
+// rather than on every pass of one.
+template <std::size_t N>
+std::array<MethodRun, N> time_methods(const Frame& frame, const std::array<Timed, N>& timed, int passes) {
+  std::array<MethodRun, N> runs;
+  std::array<std::vector<double>, N> ms;
   for (int p = 0; p < passes; ++p) {
-    double total = 0;
-    for (const Batch& b : frame.batches) {
-      const ccd::BatchInput input{b.start, b.end, b.vertex_face, b.edge_edge};
-      const auto begin = std::chrono::steady_clock::now();
-      const ccd::BatchOutput out = ccd::run_batch(input, options, 1);
-      total += std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - begin).count();
-      if (p == 0) {
-        run.counters += out.counters;
-        const std::size_t base = run.hits.size();
-        run.hits.resize(base + b.vertex_face.size() + b.edge_edge.size(), false);
-        for (const auto& hit : out.vertex_face) run.hits[base + hit.index] = true;
-        for (const auto& hit : out.edge_edge) run.hits[base + b.vertex_face.size() + hit.index] = true;
+    for (std::size_t m = 0; m < N; ++m) {
+      ccd::Options options;
+      options.method = timed[m].method;
+      options.separation_depth = timed[m].separation_depth;  // thickness 0: exact contact, as the simulation's pipeline asks
+      MethodRun& run = runs[m];
+      double total = 0;
+      for (const Batch& b : frame.batches) {
+        const ccd::BatchInput input{b.start, b.end, b.vertex_face, b.edge_edge};
+        const auto begin = std::chrono::steady_clock::now();
+        const ccd::BatchOutput out = ccd::run_batch(input, options, 1);
+        total += std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - begin).count();
+        if (p == 0) {
+          run.counters += out.counters;
+          const std::size_t base = run.hits.size();
+          run.hits.resize(base + b.vertex_face.size() + b.edge_edge.size(), false);
+          for (const auto& hit : out.vertex_face) run.hits[base + hit.index] = true;
+          for (const auto& hit : out.edge_edge) run.hits[base + b.vertex_face.size() + hit.index] = true;
+        }
       }
+      ms[m].push_back(total);
     }
-    ms.push_back(total);
   }
-  run.ms = ccd::median(ms);
-  return run;
+  for (std::size_t m = 0; m < N; ++m) runs[m].ms = ccd::median(ms[m]);
+  return runs;
 }
 
 // Where test i of a frame lives: its batch, kind and index there.
@@ -157,7 +172,7 @@ int main(int argc, char** argv) {
   app.add_option("scene", scene_path, "Scene file")->required()->check(CLI::ExistingFile);
   app.add_option("--frames", frames, "Frames to run (default: the scene's)")->check(CLI::PositiveNumber);
   app.add_option("--every", every, "Measure every K-th frame")->capture_default_str()->check(CLI::PositiveNumber);
-  app.add_option("--passes", passes, "Timed passes per method and frame (the median is printed)")
+  app.add_option("--passes", passes, "Timed passes per method and frame, interleaved across the methods (the median is printed)")
       ->capture_default_str()
       ->check(CLI::PositiveNumber);
   app.add_option("--threads", threads, "Threads of the simulation's own narrow phase (the timed ones use one)")
@@ -213,7 +228,7 @@ int main(int argc, char** argv) {
               "separation stage %d levels\n",
               scene_path.c_str(), model.vertex_count(), model.triangles.size(), frames, model.scene.frame_steps,
               model.scene.timestep(), model.scene.collisions.feature_boxes ? "on" : "off (paper's count)", separation_depth);
-  std::printf("per measured frame: every detection round of each of its steps; one thread; median of %d passes\n\n",
+  std::printf("per measured frame: every detection round of each of its steps; one thread; median of %d passes, interleaved across the methods\n\n",
               passes);
   std::printf("%5s %9s %10s %7s %7s %8s %9s %9s %9s %9s %9s %8s %8s %8s %8s %6s %5s %6s %8s %4s\n", "frame", "tri_pairs",
               "tests", "dnf%", "vin%", "vin%nc", "cubic_ms", "dnf_ms", "vin_ms", "cons_ms", "paper_ms", "vin/cub", "vin/dnf",
@@ -244,10 +259,15 @@ int main(int argc, char** argv) {
     int found = 0;
     if (check) penetrations += found = int(find_penetrations(model, state.positions, state.time).size());
     if (f % every != 0) continue;
-    MethodRun runs[5];
-    for (int m = 0; m < 4; ++m) runs[m] = time_method(current, ccd::ALL_METHODS[m], passes, separation_depth);
-    // vincent with the sign filter alone (no separation stage): the paper's method, side by side.
-    runs[PAPER] = time_method(current, ccd::Method::Vincent, passes, 0);
+    // The four methods, and vincent with the sign filter alone (no separation stage): the
+    // paper's method, side by side.
+    const std::array<MethodRun, 5> runs =
+        time_methods(current, std::array<Timed, 5>{{{ccd::ALL_METHODS[CUBIC], separation_depth},
+                                                     {ccd::ALL_METHODS[DNF], separation_depth},
+                                                     {ccd::ALL_METHODS[VINCENT], separation_depth},
+                                                     {ccd::ALL_METHODS[CONSERVATIVE], separation_depth},
+                                                     {ccd::Method::Vincent, 0}}},
+                     passes);
     // Disagreements: cubic, dnf or the paper's filter alone against vincent (no filter and no
     // stage of it may change a hit), and
     // hits of vincent the conservative method does not report (it answers exact contact; the
