@@ -306,8 +306,9 @@ DRAPE_AVX2 void merge_box4(Lanes3& box_lo, Lanes3& box_hi, const Lanes3& lo, con
   box_hi = {max4(box_hi.x, hi.x), max4(box_hi.y, hi.y), max4(box_hi.z, hi.z)};
 }
 
-// The separation stage's first question for vincent (detail::coordinate_axes_apart over [0, 1]
-// with the gap detail::contact_distance), four tests at a time: bit j set when the boxes of the
+// The separation stage's first question (detail::coordinate_axes_apart over [0, 1] with the gap
+// thickness + tolerance * extent: vincent's detail::contact_distance with the contact tolerance,
+// conservative's thickness with 0), four tests at a time: bit j set when the boxes of the
 // features of left[j] over the whole step are apart, and need[j] the gap plus the rounding
 // margin. The one-query AVX2 box test with a test per lane instead of a coordinate per lane,
 // the same decisions and need: the positions at t = 0 and t = 1 are start and start + motion
@@ -316,10 +317,10 @@ DRAPE_AVX2 void merge_box4(Lanes3& box_lo, Lanes3& box_hi, const Lanes3& lo, con
 // coordinates). need has room for count rounded up to four.
 template <QueryKind kind, class Pair>
 __attribute__((target("avx2"))) std::uint64_t whole_step_apart_avx2(const BatchInput& input, const Pair* pairs,
-                                                                    const Left* left, int count,
-                                                                    const Options& options, Scalar* need) {
+                                                                    const Left* left, int count, Scalar thickness_gap,
+                                                                    Scalar contact_tolerance, Scalar* need) {
   constexpr int split = kind == QueryKind::VertexFace ? 1 : 2;  // points [0, split) are the first feature
-  const __m256d thickness = _mm256_set1_pd(options.thickness), tolerance = _mm256_set1_pd(options.contact_tolerance);
+  const __m256d thickness = _mm256_set1_pd(thickness_gap), tolerance = _mm256_set1_pd(contact_tolerance);
   const __m256d margin = _mm256_set1_pd(detail::PROJECTION_ERROR_FACTOR * UNIT_ROUNDOFF);
   std::uint64_t apart_bits = 0;
   for (int j = 0; j < count; j += 4) {
@@ -352,21 +353,29 @@ __attribute__((target("avx2"))) std::uint64_t whole_step_apart_avx2(const BatchI
 }
 
 // The tests the chunks' decisions left, in order: the full method on the gathered query. For
-// vincent, the separation stage's first question is asked here four tests at a time, and the
-// tests it separates need nothing else.
+// vincent, and conservative at zero thickness, the separation stage's first question is asked
+// here four tests at a time, and the tests it separates need nothing else.
 template <QueryKind kind, class Pair>
 void run_left(const BatchInput& input, std::span<const Pair> pairs, const Options& options, const Left* left,
               int count, BatchCounters& counters, std::vector<BatchHit>& hits) {
-  const bool whole_step_first =
-      options.method == Method::Vincent && options.separation_depth > 0 && detail::avx2_enabled();
+  const bool stage = options.separation_depth > 0 && detail::avx2_enabled();
+  const bool vincent = options.method == Method::Vincent && stage;
+  const bool conservative = options.method == Method::Conservative && options.thickness == 0 && stage;
+  // Whether the method asks the stage, as vincent_method and conservative_search decide it.
+  const auto reaches_stage = [&](const CoplanarityCubic& cubic) {
+    return vincent ? detail::vincent_entry(cubic) == detail::VincentEntry::Stage
+                   : detail::conservative_entry(cubic, 0) == detail::ConservativeEntry::Stage;
+  };
   alignas(32) Scalar need[LEFT_MAX + 3];
   const std::uint64_t apart =
-      whole_step_first ? whole_step_apart_avx2<kind>(input, pairs.data(), left, count, options, need) : 0;
+      vincent || conservative
+          ? whole_step_apart_avx2<kind>(input, pairs.data(), left, count, options.thickness,
+                                        vincent ? options.contact_tolerance : 0, need)
+          : 0;
   for (int j = 0; j < count; ++j) {
     const CoplanarityCubic& cubic = left[j].cubic;
     Scalar whole_step_need = -1;  // not asked
-    if (whole_step_first && detail::vincent_entry(cubic) == detail::VincentEntry::Stage &&
-        detail::stage_runs(cubic, options.separation_depth)) {
+    if ((vincent || conservative) && reaches_stage(cubic) && detail::stage_runs(cubic, options.separation_depth)) {
       if ((apart >> j) & 1) {
         counters.add(Result{.path = Path::Separated});  // what roots_apart decides there
         continue;

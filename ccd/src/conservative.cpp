@@ -290,8 +290,9 @@ Result conservative_search(const Problem& p, bool use_cubic) {
   // The search's first question, before the search is set up (most tests of a cloth step end
   // here): the cubic, off by at most its error, stays farther from zero than the thickness lets
   // it come over the whole step.
-  if (use_cubic &&
-      certainly_nonzero(p.cubic.b, p.cubic.error + thickness_to_cubic(p.kind, p.query, p.options.thickness))) {
+  const Scalar thickness_share = use_cubic ? thickness_to_cubic(p.kind, p.query, p.options.thickness) : 0;
+  const ConservativeEntry entry = use_cubic ? conservative_entry(p.cubic, thickness_share) : ConservativeEntry::Search;
+  if (entry == ConservativeEntry::Culled) {
     Result culled;
     culled.path = Path::Culled;
     culled.root_solves = 1;  // one interval examined, as the search counts it
@@ -305,9 +306,12 @@ Result conservative_search(const Problem& p, bool use_cubic) {
   // contact). roots_apart keeps every sub-interval where the cubic, off by at most twice its
   // error, may come that close to zero, and shows the features farther apart than the
   // thickness (plus the rounding of the positions) over each.
-  if (use_cubic && !cubic_poorly_resolved(p.cubic) &&
-      roots_apart(p.kind, p.query, p.cubic, p.options.thickness, p.options.separation_depth,
-                  thickness_to_cubic(p.kind, p.query, p.options.thickness))) {
+  // (A caller that asked the stage's first question already passes the need it computed.)
+  if (entry == ConservativeEntry::Stage &&
+      (p.whole_step_need >= 0 ? roots_apart_within(p.kind, p.query, p.cubic, p.whole_step_need,
+                                                   p.options.separation_depth, thickness_share)
+                              : roots_apart(p.kind, p.query, p.cubic, p.options.thickness,
+                                            p.options.separation_depth, thickness_share))) {
     Result apart;
     apart.path = Path::Separated;
     return apart;

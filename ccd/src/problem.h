@@ -16,8 +16,8 @@ struct Problem {
   const Query& query;
   const Options& options;
   CoplanarityCubic cubic;
-  /// Vincent: when the caller ran the separation stage's first question (the whole step's
-  /// boxes, not apart), the need it computed there; negative when it did not.
+  /// Vincent and conservative: when the caller ran the separation stage's first question (the
+  /// whole step's boxes, not apart), the need it computed there; negative when it did not.
   Scalar whole_step_need = -1;
 };
 
@@ -163,6 +163,16 @@ inline VincentEntry vincent_entry(const CoplanarityCubic& cubic) {
   if (sign_variations(cubic.b) == 0 && !root_possible_at_start(cubic) && !root_possible_at_end(cubic))
     return VincentEntry::Culled;
   return VincentEntry::Stage;
+}
+
+/// Where conservative goes with its cubic (not the degenerate path of the other methods): its
+/// first question ends the test (culled) when the cubic, off by at most its error plus
+/// thickness_share (thickness_to_cubic in conservative.cpp, 0 at zero thickness), stays nonzero
+/// over the step; else the separation stage when the cubic is resolved; else the search.
+enum class ConservativeEntry { Culled, Stage, Search };
+inline ConservativeEntry conservative_entry(const CoplanarityCubic& cubic, Scalar thickness_share) {
+  if (certainly_nonzero(cubic.b, cubic.error + thickness_share)) return ConservativeEntry::Culled;
+  return cubic_poorly_resolved(cubic) ? ConservativeEntry::Search : ConservativeEntry::Stage;
 }
 
 /// elementary_ccd with the cubic, for a test the filter does not cull (dnf and vincent: the

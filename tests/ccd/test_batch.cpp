@@ -133,15 +133,10 @@ TEST(Batch, PortableKernelMatchesElementaryCallsAndCounts) {
 }
 
 // Features that become coplanar at mid-step a distance d apart along one coordinate axis, so
-// that their boxes over the whole step are d apart along it: a contact for d within the
-// thickness, apart beyond it. The batch asks vincent's first question of the separation stage
-// itself (four tests at a time, on every axis); it must keep the contacts and agree with the
-// one-query calls on every test, on each axis and for each feature on either side.
-TEST(Batch, WholeStepBoxesKeepContactsWithinTheThickness) {
-  constexpr Scalar thickness = 0.01;
-  std::vector<Vec3> start, end;
-  std::vector<VertexFacePair> vf;
-  std::vector<EdgeEdgePair> ee;
+// that their boxes over the whole step are d apart along it: for every axis, for each feature
+// on either side, a vertex-face test and an edge-edge test both ways.
+BatchInput coplanar_at_distances(const std::vector<Scalar>& distances, std::vector<Vec3>& start, std::vector<Vec3>& end,
+                                 std::vector<VertexFacePair>& vf, std::vector<EdgeEdgePair>& ee) {
   const auto point = [&](Vec3 s, Vec3 e, int axis) {
     // Coordinates rotated so that the offset lies along axis (0: x, 1: y, 2: z).
     const auto rotate = [axis](const Vec3& p) { return Vec3(p[(3 - axis) % 3], p[(4 - axis) % 3], p[(5 - axis) % 3]); };
@@ -149,12 +144,9 @@ TEST(Batch, WholeStepBoxesKeepContactsWithinTheThickness) {
     end.push_back(rotate(e));
     return static_cast<std::int32_t>(start.size() - 1);
   };
-  std::size_t near = 0;
   for (int axis = 0; axis < 3; ++axis)
     for (const Scalar side : {-1.0, 1.0})
-      for (const Scalar ratio : {0.1, 0.5, 0.9, 0.99, 1.01, 1.1, 2.0, 5.0}) {
-        const Scalar d = ratio * thickness;
-        near += ratio < 1;
+      for (const Scalar d : distances) {
         // A vertex falling through the plane z = 0 at t = 0.5, d beyond the triangle's edge
         // x = 0 (side -1) or its corner x = 1 (side 1), along x.
         const Scalar x = side < 0 ? -d : 1 + d;
@@ -164,13 +156,27 @@ TEST(Batch, WholeStepBoxesKeepContactsWithinTheThickness) {
         vf.push_back({v, {a, b, c}});
         // An edge along y falling through z = 0 at t = 0.5, d beyond the end of an edge along x.
         const std::int32_t e0 = point({0, 0, 0}, {0, 0, 0}, axis), e1 = point({1, 0, 0}, {1, 0, 0}, axis);
-        const Scalar ex = side < 0 ? -d : 1 + d;
-        const std::int32_t f0 = point({ex, -0.5, 0.5}, {ex, -0.5, -0.5}, axis),
-                           f1 = point({ex, 0.5, 0.5}, {ex, 0.5, -0.5}, axis);
+        const std::int32_t f0 = point({x, -0.5, 0.5}, {x, -0.5, -0.5}, axis),
+                           f1 = point({x, 0.5, 0.5}, {x, 0.5, -0.5}, axis);
         ee.push_back({{e0, e1}, {f0, f1}});
         ee.push_back({{f0, f1}, {e0, e1}});
       }
-  const BatchInput input{start, end, vf, ee};
+  return BatchInput{start, end, vf, ee};
+}
+
+// The batch asks the separation stage's first question itself (four tests at a time, on every
+// axis): with a thickness, vincent must keep the contacts within it and separate the rest.
+// Fails when any lane's box test reads the gap as zero.
+TEST(Batch, WholeStepBoxesKeepContactsWithinTheThickness) {
+  constexpr Scalar thickness = 0.01;
+  const std::vector<Scalar> ratios{0.1, 0.5, 0.9, 0.99, 1.01, 1.1, 2.0, 5.0};
+  std::vector<Scalar> distances;
+  for (const Scalar r : ratios) distances.push_back(r * thickness);
+  const std::size_t near = 3 * 2 * 4;  // axes, sides, ratios below 1
+  std::vector<Vec3> start, end;
+  std::vector<VertexFacePair> vf;
+  std::vector<EdgeEdgePair> ee;
+  const BatchInput input = coplanar_at_distances(distances, start, end, vf, ee);
   Options options;
   options.method = Method::Vincent;
   options.thickness = thickness;
@@ -179,4 +185,26 @@ TEST(Batch, WholeStepBoxesKeepContactsWithinTheThickness) {
   EXPECT_EQ(out.vertex_face.size(), near);
   EXPECT_EQ(out.edge_edge.size(), 2 * near);
   EXPECT_EQ(out.counters.separated, out.counters.tests - 3 * near);
+}
+
+// At zero thickness conservative's gap is the rounding margin alone (64 u times the largest
+// coordinate, about 7e-15 here), vincent's the contact tolerance (1e-9 of the extent) besides:
+// features closer than that go on to the tree, the roots and the search, farther ones are
+// separated, every counter as the one-query calls give it.
+TEST(Batch, WholeStepBoxesAtZeroThicknessMatchElementaryCalls) {
+  const Scalar margin = 64 * UNIT_ROUNDOFF;
+  std::vector<Vec3> start, end;
+  std::vector<VertexFacePair> vf;
+  std::vector<EdgeEdgePair> ee;
+  const BatchInput input = coplanar_at_distances({0.0, 0.1 * margin, 0.5 * margin, 4 * margin, 16 * margin, 1e-10, 1e-6, 1e-3},
+                                                 start, end, vf, ee);
+  for (const Method method : {Method::Vincent, Method::Conservative}) {
+    SCOPED_TRACE(method_name(method));
+    Options options;
+    options.method = method;
+    const BatchOutput out = expect_batch_matches_elementary_calls(input, options);
+    EXPECT_GT(out.counters.separated, 0u);
+    EXPECT_LT(out.counters.separated, out.counters.tests);
+    EXPECT_GT(out.counters.hits, 0u);
+  }
 }
