@@ -306,12 +306,7 @@ Result conservative_search(const Problem& p, bool use_cubic) {
   // contact). roots_apart keeps every sub-interval where the cubic, off by at most twice its
   // error, may come that close to zero, and shows the features farther apart than the
   // thickness (plus the rounding of the positions) over each.
-  // (A caller that asked the stage's first question already passes the need it computed.)
-  if (entry == ConservativeEntry::Stage &&
-      (p.whole_step_need >= 0 ? roots_apart_within(p.kind, p.query, p.cubic, p.whole_step_need,
-                                                   p.options.separation_depth, thickness_share)
-                              : roots_apart(p.kind, p.query, p.cubic, p.options.thickness,
-                                            p.options.separation_depth, thickness_share))) {
+  if (entry == ConservativeEntry::Stage && stage_separates(p, p.options.thickness, thickness_share)) {
     Result apart;
     apart.path = Path::Separated;
     return apart;

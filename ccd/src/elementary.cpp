@@ -109,11 +109,7 @@ Result vincent_method(const Problem& p) {
   // The separation stage: wherever the cubic may vanish, the features are apart. That covers
   // the ends too: a root within rounding of t = 0 or t = 1 lies in the first or last kept
   // interval, so the inside tests below would fail there as well.
-  const bool apart =
-      p.whole_step_need >= 0
-          ? detail::roots_apart_within(p.kind, p.query, p.cubic, p.whole_step_need, p.options.separation_depth)
-          : detail::roots_apart(p.kind, p.query, p.cubic, contact_distance(p), p.options.separation_depth);
-  if (apart) {
+  if (detail::stage_separates(p, contact_distance(p))) {
     Result apart;
     apart.path = Path::Separated;
     return apart;

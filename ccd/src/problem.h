@@ -165,6 +165,15 @@ inline VincentEntry vincent_entry(const CoplanarityCubic& cubic) {
   return VincentEntry::Stage;
 }
 
+/// The separation stage for a problem (roots_apart), or its part after the whole step's boxes
+/// where the caller asked those already (whole_step_need set): vincent with the contact
+/// distance as the gap, conservative with the thickness and its share of the cubic.
+inline bool stage_separates(const Problem& p, Scalar gap, Scalar cubic_margin = 0) {
+  return p.whole_step_need >= 0
+             ? roots_apart_within(p.kind, p.query, p.cubic, p.whole_step_need, p.options.separation_depth, cubic_margin)
+             : roots_apart(p.kind, p.query, p.cubic, gap, p.options.separation_depth, cubic_margin);
+}
+
 /// Where conservative goes with its cubic (not the degenerate path of the other methods): its
 /// first question ends the test (culled) when the cubic, off by at most its error plus
 /// thickness_share (thickness_to_cubic in conservative.cpp, 0 at zero thickness), stays nonzero
