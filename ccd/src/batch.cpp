@@ -74,8 +74,8 @@ struct ChunkCubics {
   std::uint64_t culled = 0;  // bit i: filter_culls of test i's cubic
   // Bit i: the conservative method's first question: resolved, and every coefficient beyond
   // its error plus the thickness's share of the cubic with one sign (certainly_nonzero on the
-  // whole step). Only computed where asked for: the AVX2 path's APART, at any thickness; the
-  // portable path always, but for zero thickness only (the error alone).
+  // whole step). Only computed where asked for: by the AVX2 path's APART kernels, at any
+  // thickness; by the portable path always, but for zero thickness only (the error alone).
   std::uint64_t certainly_apart = 0;
 };
 
@@ -204,10 +204,14 @@ DRAPE_AVX2 __m256d norm4(const Lanes3& u) {
                                       _mm256_mul_pd(u.z, u.z)));
 }
 
+// Which of conservative's first question the kernel asks: none, at zero thickness (the error
+// alone), or with the thickness's share of the cubic (a separate kernel: the share's norms keep
+// more registers alive).
+enum class Apart { No, AtZeroThickness, WithThickness };
+
 // Tests [0, n) of pairs, n <= CHUNK, into c (the arrays a0..c1 are not filled); with APART
-// also c.certainly_apart (the conservative method's first question, with the thickness),
-// else it stays 0.
-template <QueryKind kind, bool APART, class Pair>
+// also c.certainly_apart (the conservative method's first question), else it stays 0.
+template <QueryKind kind, Apart APART, class Pair>
 __attribute__((target("avx2"))) void gather_cubics_avx2(const BatchInput& input, const Pair* pairs, std::size_t n,
                                                         Scalar thickness, ChunkCubics& c) {
   constexpr Scalar unit_roundoff = std::numeric_limits<Scalar>::epsilon() / 2;
@@ -245,13 +249,13 @@ __attribute__((target("avx2"))) void gather_cubics_avx2(const BatchInput& input,
     const __m256d one_sign = _mm256_or_pd(_mm256_cmp_pd(lo, zero, _CMP_GT_OQ), _mm256_cmp_pd(hi, zero, _CMP_LT_OQ));
     const __m256d ends_clear = _mm256_cmp_pd(min4(abs4(k0), abs4(k3)), e, _CMP_GT_OQ);
     culled_bits |= std::uint64_t(_mm256_movemask_pd(_mm256_and_pd(_mm256_and_pd(resolved, one_sign), ends_clear))) << i;
-    if constexpr (APART) {
+    if constexpr (APART != Apart::No) {
       // The margin: the error, plus with a thickness conservative.cpp's thickness_to_cubic
       // lane by lane (the longer of each of two edges at the two ends of the step: the vertex-
       // face test's triangle edges from its first vertex, A and B; the edge-edge test's edges,
       // A and x4 - x3 from the points themselves, as the scalar code subtracts them).
       __m256d m = e;
-      if (thickness > 0) {
+      if constexpr (APART == Apart::WithThickness) {
         const __m256d first = max4(norm4(A0), norm4(A1));
         const __m256d second = kind == QueryKind::VertexFace ? max4(norm4(B0), norm4(B1))
                                                              : max4(norm4(sub4(s4, s3)), norm4(sub4(e4, e3)));
@@ -409,10 +413,12 @@ BatchCounters run_range(const BatchInput& input, std::span<const Pair> pairs, co
     const std::size_t n = std::min(CHUNK, end - first);
     if (!detail::avx2_enabled()) {
       gather_cubics(input, pairs.data() + first, n, order, c);
+    } else if (conservative_first && options.thickness > 0) {
+      gather_cubics_avx2<kind, Apart::WithThickness>(input, pairs.data() + first, n, options.thickness, c);
     } else if (conservative_first) {
-      gather_cubics_avx2<kind, true>(input, pairs.data() + first, n, options.thickness, c);
+      gather_cubics_avx2<kind, Apart::AtZeroThickness>(input, pairs.data() + first, n, options.thickness, c);
     } else {
-      gather_cubics_avx2<kind, false>(input, pairs.data() + first, n, options.thickness, c);
+      gather_cubics_avx2<kind, Apart::No>(input, pairs.data() + first, n, options.thickness, c);
     }
     // The tests that end with the chunk's decisions, counted at once; the others kept, in
     // order, and run when a chunk's worth are waiting.
