@@ -154,7 +154,8 @@ inline bool root_possible_at_end(const CoplanarityCubic& c) { return std::abs(c.
 
 /// Where vincent goes with a cubic the sign cull left: the degenerate path when the cubic is
 /// poorly resolved (as cubic does), culled when no sign varies and no root is possible at
-/// either end of the step, else the separation stage (roots_apart). elementary.cpp.
+/// either end of the step, else the separation stage (roots_apart). Shared by vincent_method
+/// (elementary.cpp) and the batch, which asks the stage's first question itself.
 enum class VincentEntry { Degenerate, Culled, Stage };
 inline VincentEntry vincent_entry(const CoplanarityCubic& cubic) {
   // Unreliable roots first, as cubic does: the filter must not cull what cubic would find.
