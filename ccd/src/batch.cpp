@@ -356,6 +356,178 @@ __attribute__((target("avx2"))) std::uint64_t whole_step_apart_avx2(const BatchI
   return apart_bits & chunk_bits(std::size_t(count));
 }
 
+// The rest of the separation stage after the whole step's boxes (detail::roots_apart_within,
+// no cubic margin), four tests at a time, a test per lane, for the tests whose boxes were not
+// apart: the tree of halvings, then the one run of kept sub-intervals through apart_over's axes
+// (the coordinate boxes, the shape's axes at the run's midpoint). Which sub-intervals are kept
+// and which axis separates are random from one cloth test to the next, so the scalar code's
+// branches cost more than its arithmetic; here every lane computes everything, with the scalar
+// code's operations in its order (separation.cpp), so the decisions are the same.
+
+DRAPE_AVX2 __m256d negate4(__m256d a) { return _mm256_xor_pd(a, _mm256_set1_pd(-0.0)); }
+
+// The tree of halvings below b, DEPTH levels deep, as kept_leaves in separation.cpp: lane l of
+// kept (a 64-bit integer per lane) gets bit first + i when its sub-interval i may hold a root.
+template <int DEPTH>
+DRAPE_AVX2 void kept_leaves4(const __m256d (&b)[4], __m256d margin, int first, __m256d& kept) {
+  if constexpr (DEPTH == 0) {
+    const __m256d minus = negate4(margin);
+    const __m256d above =
+        _mm256_and_pd(_mm256_and_pd(_mm256_cmp_pd(b[0], margin, _CMP_GT_OQ), _mm256_cmp_pd(b[1], margin, _CMP_GT_OQ)),
+                      _mm256_and_pd(_mm256_cmp_pd(b[2], margin, _CMP_GT_OQ), _mm256_cmp_pd(b[3], margin, _CMP_GT_OQ)));
+    const __m256d below =
+        _mm256_and_pd(_mm256_and_pd(_mm256_cmp_pd(b[0], minus, _CMP_LT_OQ), _mm256_cmp_pd(b[1], minus, _CMP_LT_OQ)),
+                      _mm256_and_pd(_mm256_cmp_pd(b[2], minus, _CMP_LT_OQ), _mm256_cmp_pd(b[3], minus, _CMP_LT_OQ)));
+    const __m256d bit = _mm256_castsi256_pd(_mm256_set1_epi64x(std::int64_t(1) << first));
+    kept = _mm256_or_pd(kept, _mm256_andnot_pd(_mm256_or_pd(above, below), bit));
+  } else {
+    const __m256d half = _mm256_set1_pd(0.5);
+    const __m256d b01 = _mm256_mul_pd(half, _mm256_add_pd(b[0], b[1]));
+    const __m256d b12 = _mm256_mul_pd(half, _mm256_add_pd(b[1], b[2]));
+    const __m256d b23 = _mm256_mul_pd(half, _mm256_add_pd(b[2], b[3]));
+    const __m256d b012 = _mm256_mul_pd(half, _mm256_add_pd(b01, b12));
+    const __m256d b123 = _mm256_mul_pd(half, _mm256_add_pd(b12, b23));
+    const __m256d mid = _mm256_mul_pd(half, _mm256_add_pd(b012, b123));
+    kept_leaves4<DEPTH - 1>({b[0], b01, b012, mid}, margin, first, kept);
+    kept_leaves4<DEPTH - 1>({mid, b123, b23, b[3]}, margin, first + (1 << (DEPTH - 1)), kept);
+  }
+}
+
+// Whether the projections on axis w (a test per lane) of points [0, split) and [split, 4) over
+// [lo, hi] (x0, x1) are farther apart than need scaled by w's 1-norm: apart_along.
+DRAPE_AVX2 __m256d apart_along4(const Lanes3 (&x0)[4], const Lanes3 (&x1)[4], int split, const Lanes3& w,
+                                __m256d need) {
+  const __m256d infinity = _mm256_set1_pd(std::numeric_limits<Scalar>::infinity());
+  __m256d a_lo = infinity, a_hi = negate4(infinity), b_lo = infinity, b_hi = negate4(infinity);
+  for (int i = 0; i < 4; ++i) {
+    const __m256d p0 = dot4(w, x0[i]), p1 = dot4(w, x1[i]);
+    const __m256d lo = min4(p0, p1), hi = max4(p0, p1);
+    __m256d& group_lo = i < split ? a_lo : b_lo;
+    __m256d& group_hi = i < split ? a_hi : b_hi;
+    group_lo = min4(group_lo, lo);
+    group_hi = max4(group_hi, hi);
+  }
+  const __m256d scaled = _mm256_mul_pd(need, _mm256_add_pd(_mm256_add_pd(abs4(w.x), abs4(w.y)), abs4(w.z)));
+  return apart4(a_lo, a_hi, b_lo, b_hi, scaled);
+}
+
+struct StageLanes {
+  unsigned decided = 0;  // bit l: lane l's answer is known (no run, or one)
+  unsigned apart = 0;    // bit l: the stage separates lane l's features
+};
+
+// Tests test[0..3] (tests may repeat), need[l] the gap plus the rounding margin of their whole
+// step's boxes. A lane with two runs or more is left undecided, for roots_apart_within.
+template <QueryKind kind, class Pair>
+__attribute__((target("avx2"))) StageLanes stage_within_avx2(const BatchInput& input, const Pair* pairs,
+                                                             const Left* const (&test)[4], const Scalar (&need)[4],
+                                                             int depth) {
+  depth = std::min(depth, detail::MAX_SEPARATION_DEPTH);
+  __m256d b[4];
+  for (int k = 0; k < 4; ++k)
+    b[k] = _mm256_set_pd(test[3]->cubic.b[k], test[2]->cubic.b[k], test[1]->cubic.b[k], test[0]->cubic.b[k]);
+  const __m256d error =
+      _mm256_set_pd(test[3]->cubic.error, test[2]->cubic.error, test[1]->cubic.error, test[0]->cubic.error);
+  // roots_apart_within's margin (max_abs: the largest of four finite magnitudes, in any order).
+  const __m256d largest = max4(max4(max4(abs4(b[0]), abs4(b[1])), abs4(b[2])), abs4(b[3]));
+  const __m256d margin = _mm256_add_pd(_mm256_add_pd(_mm256_mul_pd(_mm256_set1_pd(2.0), error),
+                                                     _mm256_mul_pd(_mm256_set1_pd(256 * UNIT_ROUNDOFF), largest)),
+                                       _mm256_setzero_pd());
+  assert(depth >= 1);  // stage_runs held
+  __m256d kept_lanes = _mm256_setzero_pd();
+  switch (depth) {
+    case 1: kept_leaves4<1>(b, margin, 0, kept_lanes); break;
+    case 2: kept_leaves4<2>(b, margin, 0, kept_lanes); break;
+    case 3: kept_leaves4<3>(b, margin, 0, kept_lanes); break;
+    case 4: kept_leaves4<4>(b, margin, 0, kept_lanes); break;
+    case 5: kept_leaves4<5>(b, margin, 0, kept_lanes); break;
+    default: kept_leaves4<6>(b, margin, 0, kept_lanes); break;
+  }
+  alignas(32) std::uint64_t kept_of[4];
+  _mm256_store_si256(reinterpret_cast<__m256i*>(kept_of), _mm256_castpd_si256(kept_lanes));
+  // Each lane's kept sub-intervals, and its run's time range (widened as apart_over widens it).
+  const int leaves = 1 << depth;
+  const std::uint64_t all = leaves == 64 ? ~std::uint64_t(0) : (std::uint64_t(1) << leaves) - 1;
+  const Scalar width = Scalar(1) / Scalar(leaves);
+  StageLanes out;
+  unsigned runs = 0;  // lanes with one run to test
+  alignas(32) Scalar lo[4] = {0, 0, 0, 0}, hi[4] = {1, 1, 1, 1};
+  for (int l = 0; l < 4; ++l) {
+    const std::uint64_t kept = kept_of[l];
+    if (kept == 0 || kept == all) {  // no root anywhere: apart; roots anywhere: the whole step's boxes said no
+      out.decided |= 1u << l;
+      out.apart |= unsigned(kept == 0) << l;
+      continue;
+    }
+    const int first = __builtin_ctzll(kept);
+    const int past = first + __builtin_ctzll(~(kept >> first));
+    if (past < 64 && (kept >> past) != 0) continue;  // another run after this one
+    lo[l] = std::max(Scalar(0), first * width - detail::TIME_WIDENING);
+    hi[l] = std::min(Scalar(1), past * width + detail::TIME_WIDENING);
+    runs |= 1u << l;
+  }
+  if (runs == 0) return out;
+  // The points at the run's ends, as apart_over computes them: start + t * motion.
+  const Pair* const pair[4] = {pairs + test[0]->index, pairs + test[1]->index, pairs + test[2]->index,
+                               pairs + test[3]->index};
+  const __m256d at_lo = _mm256_load_pd(lo), at_hi = _mm256_load_pd(hi);
+  Lanes3 x0[4], x1[4];
+  for (int i = 0; i < 4; ++i) {
+    const Lanes3 s = load4_point(input.start.data(), pair, i), e = load4_point(input.end.data(), pair, i);
+    const Lanes3 motion = sub4(e, s);
+    x0[i] = {_mm256_add_pd(s.x, _mm256_mul_pd(at_lo, motion.x)), _mm256_add_pd(s.y, _mm256_mul_pd(at_lo, motion.y)),
+             _mm256_add_pd(s.z, _mm256_mul_pd(at_lo, motion.z))};
+    x1[i] = {_mm256_add_pd(s.x, _mm256_mul_pd(at_hi, motion.x)), _mm256_add_pd(s.y, _mm256_mul_pd(at_hi, motion.y)),
+             _mm256_add_pd(s.z, _mm256_mul_pd(at_hi, motion.z))};
+  }
+  const __m256d need4 = _mm256_loadu_pd(need);
+  constexpr int split = kind == QueryKind::VertexFace ? 1 : 2;
+  // The coordinate boxes (boxes_apart_avx2): point 0 is always the first feature's, point 3 the
+  // second's.
+  Lanes3 point_lo[4], point_hi[4];
+  for (int i = 0; i < 4; ++i) {
+    point_lo[i] = {min4(x0[i].x, x1[i].x), min4(x0[i].y, x1[i].y), min4(x0[i].z, x1[i].z)};
+    point_hi[i] = {max4(x0[i].x, x1[i].x), max4(x0[i].y, x1[i].y), max4(x0[i].z, x1[i].z)};
+  }
+  Lanes3 a_lo = point_lo[0], a_hi = point_hi[0], b_lo = point_lo[3], b_hi = point_hi[3];
+  for (int i = 1; i < 3; ++i) merge_box4(i < split ? a_lo : b_lo, i < split ? a_hi : b_hi, point_lo[i], point_hi[i]);
+  __m256d apart = _mm256_or_pd(_mm256_or_pd(apart4(a_lo.x, a_hi.x, b_lo.x, b_hi.x, need4),
+                                            apart4(a_lo.y, a_hi.y, b_lo.y, b_hi.y, need4)),
+                               apart4(a_lo.z, a_hi.z, b_lo.z, b_hi.z, need4));
+  // The shape's axes (shape_axes_apart), at the midpoints of the run.
+  const __m256d half = _mm256_set1_pd(0.5);
+  Lanes3 m[4];
+  for (int i = 0; i < 4; ++i)
+    m[i] = {_mm256_mul_pd(half, _mm256_add_pd(x0[i].x, x1[i].x)), _mm256_mul_pd(half, _mm256_add_pd(x0[i].y, x1[i].y)),
+            _mm256_mul_pd(half, _mm256_add_pd(x0[i].z, x1[i].z))};
+  if constexpr (kind == QueryKind::VertexFace) {
+    // The in-plane normal of the triangle edge the vertex lies farthest outside of.
+    const Lanes3 e[3] = {sub4(m[2], m[1]), sub4(m[3], m[2]), sub4(m[1], m[3])};
+    const Lanes3 n = cross4(e[0], {negate4(e[2].x), negate4(e[2].y), negate4(e[2].z)});
+    Lanes3 best = cross4(n, e[0]);
+    __m256d best_value = _mm256_set1_pd(std::numeric_limits<Scalar>::infinity());
+    for (int i = 0; i < 3; ++i) {
+      const Lanes3 axis = i == 0 ? best : cross4(n, e[i]);
+      const __m256d norm = _mm256_add_pd(_mm256_add_pd(abs4(axis.x), abs4(axis.y)), abs4(axis.z));
+      const __m256d value = _mm256_div_pd(dot4(sub4(m[0], m[1 + i]), axis), norm);
+      const __m256d lower = _mm256_cmp_pd(value, best_value, _CMP_LT_OQ);
+      best_value = _mm256_blendv_pd(best_value, value, lower);
+      best = {_mm256_blendv_pd(best.x, axis.x, lower), _mm256_blendv_pd(best.y, axis.y, lower),
+              _mm256_blendv_pd(best.z, axis.z, lower)};
+    }
+    apart = _mm256_or_pd(apart, apart_along4(x0, x1, split, best, need4));
+  } else {
+    // The in-plane normals of the two edges.
+    const Lanes3 a = sub4(m[1], m[0]), b = sub4(m[3], m[2]);
+    const Lanes3 n = cross4(a, b);
+    apart = _mm256_or_pd(apart, _mm256_or_pd(apart_along4(x0, x1, split, cross4(n, b), need4),
+                                             apart_along4(x0, x1, split, cross4(n, a), need4)));
+  }
+  out.decided |= runs;
+  out.apart |= runs & unsigned(_mm256_movemask_pd(apart));
+  return out;
+}
+
 // The tests the chunks' decisions left, in order: the full method on the gathered query. For
 // vincent, and conservative at zero thickness, the separation stage's first question is asked
 // here four tests at a time, and the tests it separates need nothing else.
@@ -371,22 +543,45 @@ void run_left(const BatchInput& input, std::span<const Pair> pairs, const Option
                    : detail::conservative_entry(cubic, 0) == detail::ConservativeEntry::Stage;
   };
   alignas(32) Scalar need[LEFT_MAX + 3];
-  const std::uint64_t apart =
-      vincent || conservative
-          ? whole_step_apart_avx2<kind>(input, pairs.data(), left, count, options.thickness,
-                                        vincent ? options.contact_tolerance : 0, need)
-          : 0;
+  std::uint64_t whole_step_apart = 0, within = 0, decided = 0, apart = 0;
+  if (vincent || conservative) {
+    whole_step_apart = whole_step_apart_avx2<kind>(input, pairs.data(), left, count, options.thickness,
+                                                   vincent ? options.contact_tolerance : 0, need);
+    // The tests that ask the stage and whose whole step's boxes were not apart: the rest of the
+    // stage four at a time.
+    int asked[LEFT_MAX], asked_count = 0;
+    for (int j = 0; j < count; ++j) {
+      const CoplanarityCubic& cubic = left[j].cubic;
+      if (reaches_stage(cubic) && detail::stage_runs(cubic, options.separation_depth)) {
+        within |= std::uint64_t(1) << j;
+        if (!((whole_step_apart >> j) & 1)) asked[asked_count++] = j;
+      }
+    }
+    for (int g = 0; g < asked_count; g += 4) {
+      int lane[4];
+      for (int l = 0; l < 4; ++l) lane[l] = asked[std::min(g + l, asked_count - 1)];
+      const Left* const test[4] = {left + lane[0], left + lane[1], left + lane[2], left + lane[3]};
+      const Scalar lane_need[4] = {need[lane[0]], need[lane[1]], need[lane[2]], need[lane[3]]};
+      const StageLanes s = stage_within_avx2<kind>(input, pairs.data(), test, lane_need, options.separation_depth);
+      for (int l = 0; l < 4 && g + l < asked_count; ++l) {
+        decided |= std::uint64_t((s.decided >> l) & 1) << lane[l];
+        apart |= std::uint64_t((s.apart >> l) & 1) << lane[l];
+      }
+    }
+  }
   for (int j = 0; j < count; ++j) {
-    const CoplanarityCubic& cubic = left[j].cubic;
-    Scalar whole_step_need = -1;  // not asked
-    if ((vincent || conservative) && reaches_stage(cubic) && detail::stage_runs(cubic, options.separation_depth)) {
-      if ((apart >> j) & 1) {
+    const std::uint64_t bit = std::uint64_t(1) << j;
+    detail::StageAsked asked;  // nothing
+    if (within & bit) {
+      if ((whole_step_apart | apart) & bit) {
         counters.add(Result{.path = Path::Separated});  // what roots_apart decides there
         continue;
       }
-      whole_step_need = need[j];
+      asked = (decided & bit) ? detail::StageAsked{detail::StageAsked::Part::All}
+                              : detail::StageAsked{detail::StageAsked::Part::WholeStep, need[j]};
     }
-    const Result result = detail::run_unculled(kind, gather(input, pairs[left[j].index]), options, cubic, whole_step_need);
+    const Result result =
+        detail::run_unculled(kind, gather(input, pairs[left[j].index]), options, left[j].cubic, asked);
     counters.add(result);
     if (result.hit) hits.push_back({left[j].index, result});
   }

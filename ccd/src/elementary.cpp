@@ -176,8 +176,8 @@ bool filters(const Options& options) { return options.method == Method::Vincent 
 }  // namespace
 
 Result detail::run_unculled(QueryKind kind, const Query& query, const Options& options,
-                            const CoplanarityCubic& cubic, Scalar whole_step_need) {
-  const Problem p{kind, query, options, cubic, whole_step_need};
+                            const CoplanarityCubic& cubic, detail::StageAsked stage) {
+  const Problem p{kind, query, options, cubic, stage};
   switch (options.method) {
     case Method::Cubic: return cubic_method(p);
     case Method::Dnf: return dnf_method(p);

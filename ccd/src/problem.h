@@ -11,14 +11,22 @@
 
 namespace drape::ccd::detail {
 
+/// How much of the separation stage (roots_apart) the caller asked already: the batch asks it
+/// four tests at a time. Nothing; its first question, the whole step's boxes, which were not
+/// apart (need: the gap plus the rounding margin computed there, for the intervals below); or
+/// all of it, which did not separate the features.
+struct StageAsked {
+  enum class Part { Nothing, WholeStep, All } part = Part::Nothing;
+  Scalar need = 0;
+};
+
 struct Problem {
   QueryKind kind;
   const Query& query;
   const Options& options;
   CoplanarityCubic cubic;
-  /// Vincent and conservative: when the caller ran the separation stage's first question (the
-  /// whole step's boxes, not apart), the need it computed there; negative when it did not.
-  Scalar whole_step_need = -1;
+  /// Vincent and conservative: what the caller asked of the separation stage.
+  StageAsked stage = {};
 };
 
 /// Positions of the four points at time t, in precision T.
@@ -55,6 +63,15 @@ Proximity<T> proximity_at(QueryKind kind, const Query& q, T t) {
 // the distance the root-finding methods compute at a root (DISTANCE_ERROR_FACTOR of the
 // conservative search, 32). 64 covers them with a factor of two to spare.
 inline constexpr Scalar PROJECTION_ERROR_FACTOR = 64.0;
+
+/// The separation stage widens each sub-interval's time range by this much on both sides before
+/// the axis tests: the root-finding methods report a root within their tolerance (1e-13 of the
+/// step) of where their computed cubic changes sign, which may lie just across a sub-interval's
+/// end.
+inline constexpr Scalar TIME_WIDENING = 0x1p-30;
+
+/// The deepest tree of halvings of the separation stage (64 sub-intervals).
+inline constexpr int MAX_SEPARATION_DEPTH = 6;
 
 inline Scalar max_abs_coordinate(const Query& q) {
   Scalar m = 0;
@@ -166,13 +183,18 @@ inline VincentEntry vincent_entry(const CoplanarityCubic& cubic) {
   return VincentEntry::Stage;
 }
 
-/// The separation stage for a problem (roots_apart), or its part after the whole step's boxes
-/// where the caller asked those already (whole_step_need set): vincent with the contact
-/// distance as the gap, conservative with the thickness and its share of the cubic.
+/// The separation stage for a problem (roots_apart), or what is left of it after what the
+/// caller asked (p.stage): vincent with the contact distance as the gap, conservative with the
+/// thickness and its share of the cubic.
 inline bool stage_separates(const Problem& p, Scalar gap, Scalar cubic_margin = 0) {
-  return p.whole_step_need >= 0
-             ? roots_apart_within(p.kind, p.query, p.cubic, p.whole_step_need, p.options.separation_depth, cubic_margin)
-             : roots_apart(p.kind, p.query, p.cubic, gap, p.options.separation_depth, cubic_margin);
+  switch (p.stage.part) {
+    case StageAsked::Part::Nothing:
+      return roots_apart(p.kind, p.query, p.cubic, gap, p.options.separation_depth, cubic_margin);
+    case StageAsked::Part::WholeStep:
+      return roots_apart_within(p.kind, p.query, p.cubic, p.stage.need, p.options.separation_depth, cubic_margin);
+    case StageAsked::Part::All: break;
+  }
+  return false;  // the caller's stage did not separate them
 }
 
 /// Where conservative goes with its cubic (not the degenerate path of the other methods): its
@@ -188,9 +210,9 @@ inline ConservativeEntry conservative_entry(const CoplanarityCubic& cubic, Scala
 /// elementary_ccd with the cubic, for a test the filter does not cull (dnf and vincent: the
 /// caller has checked filter_culls) or whose method has no filter: the batch, whose kernel
 /// decided the cull already. elementary.cpp.
-/// whole_step_need: see Problem.
+/// stage: see Problem.
 Result run_unculled(QueryKind kind, const Query& query, const Options& options, const CoplanarityCubic& cubic,
-                    Scalar whole_step_need = -1);
+                    StageAsked stage = {});
 
 /// The conservative method, and the degenerate path of the others (use_cubic = false: the
 /// cubic says nothing, decide by distance alone).

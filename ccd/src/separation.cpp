@@ -9,14 +9,6 @@ namespace drape::ccd::detail {
 
 namespace {
 
-// Each sub-interval's time range is widened by this much on both sides before the axis test:
-// the root-finding methods report a root within their tolerance (1e-13 of the step) of where
-// their computed cubic changes sign, which may lie just across a sub-interval's end.
-constexpr Scalar TIME_WIDENING = 0x1p-30;
-
-// Deepest tree of halvings (64 sub-intervals).
-constexpr int MAX_SEPARATION_DEPTH = 6;
-
 // Whether the projections p of points [0, split) and [split, 4), at the two times, form ranges
 // farther apart than need. For finite coordinates: roots_apart returns before any axis test for
 // a cubic that is not finite (a NaN coordinate makes b0 or b3 NaN), so none reaches here from

@@ -208,3 +208,61 @@ TEST(Batch, WholeStepBoxesAtZeroThicknessMatchElementaryCalls) {
     EXPECT_GT(out.counters.hits, 0u);
   }
 }
+
+// The rest of the separation stage (the tree of halvings, each test's run of kept sub-intervals
+// through the coordinate boxes and the shape's axes) is asked four tests at a time too, at
+// every depth of the tree: the same decisions as the one-query calls, at each depth, where the
+// runs, the shapes and the axes that separate differ from test to test.
+TEST(Batch, SeparationStageAtEveryDepthMatchesElementaryCalls) {
+  const ClothLikeSet set = cloth_like_set(8, 7);
+  const std::vector<VertexFacePair> vf = vertex_face_pairs(set);
+  const std::vector<EdgeEdgePair> ee = edge_edge_pairs(set);
+  const BatchInput input{set.start, set.end, vf, ee};
+  for (int depth = 1; depth <= 7; ++depth)
+    for (const Method method : {Method::Vincent, Method::Conservative})
+      for (const Scalar thickness : {0.0, 0.01}) {
+        SCOPED_TRACE(std::string(method_name(method)) + " depth " + std::to_string(depth) + " thickness " +
+                     std::to_string(thickness));
+        Options options;
+        options.method = method;
+        options.thickness = thickness;
+        options.separation_depth = depth;
+        const BatchOutput out = expect_batch_matches_elementary_calls(input, options);
+        EXPECT_GT(out.counters.separated, 0u);
+      }
+}
+
+// Edges that become coplanar at mid-step, the second's line crossing the first outside it, at
+// angles where no coordinate box separates them: only the first edge's in-plane normal does,
+// or with the edges swapped only the second's. The batch, which asks both axes of every lane,
+// must separate them all, as the one-query calls do.
+TEST(Batch, EdgeEdgeShapeAxesSeparateEitherWay) {
+  std::vector<Vec3> start, end;
+  std::vector<EdgeEdgePair> ee;
+  const auto point = [&](const Vec3& s, const Vec3& e) {
+    start.push_back(s);
+    end.push_back(e);
+    return static_cast<std::int32_t>(start.size() - 1);
+  };
+  for (const Scalar angle : {0.3, 0.7, 0.785, 1.1, 1.3}) {
+    const Vec3 u(std::cos(angle), std::sin(angle), 0), v(-std::sin(angle), std::cos(angle), 0);
+    for (const Scalar gap : {0.05, 0.5}) {
+      // The first edge at rest across the origin along u; the second along v from gap to 2,
+      // falling through z = 0 at t = 0.4 (inside a sub-interval at every depth).
+      const std::int32_t a0 = point(-u, -u), a1 = point(u, u);
+      const Vec3 above(0, 0, 0.4), below(0, 0, -0.6);
+      const std::int32_t b0 = point(gap * v + above, gap * v + below), b1 = point(2 * v + above, 2 * v + below);
+      ee.push_back({{a0, a1}, {b0, b1}});
+      ee.push_back({{b0, b1}, {a0, a1}});
+    }
+  }
+  const BatchInput input{start, end, {}, ee};
+  for (int depth = 1; depth <= 6; ++depth) {
+    SCOPED_TRACE("depth " + std::to_string(depth));
+    Options options;
+    options.method = Method::Vincent;
+    options.separation_depth = depth;
+    const BatchOutput out = expect_batch_matches_elementary_calls(input, options);
+    EXPECT_EQ(out.counters.separated, ee.size());
+  }
+}
