@@ -310,6 +310,45 @@ DRAPE_AVX2 void merge_box4(Lanes3& box_lo, Lanes3& box_hi, const Lanes3& lo, con
   box_hi = {max4(box_hi.x, hi.x), max4(box_hi.y, hi.y), max4(box_hi.z, hi.z)};
 }
 
+// Whether each of four tests goes on to the separation stage, from their cubics b and errors:
+// detail::stage_runs (every coefficient finite) and the method's entry gives Stage, vincent's
+// (detail::vincent_entry: resolved, and the signs vary or a root is possible at an end; signs
+// vary exactly when a coefficient is above zero and another below, zeros skipped as
+// sign_variations skips them) or conservative's at zero thickness (detail::conservative_entry:
+// resolved, and not certainly nonzero). Only finite lanes need the others' bits: among finite
+// coefficients the largest magnitude is the same in any order.
+template <bool VINCENT>
+DRAPE_AVX2 int reaches_stage4(const __m256d (&b)[4], __m256d error) {
+  const __m256d zero = _mm256_setzero_pd(), infinity = _mm256_set1_pd(std::numeric_limits<Scalar>::infinity());
+  const __m256d every = _mm256_castsi256_pd(_mm256_set1_epi64x(-1));
+  __m256d magnitude[4], finite = every, largest = zero, above = zero, below = zero;
+  for (int k = 0; k < 4; ++k) {
+    magnitude[k] = abs4(b[k]);
+    finite = _mm256_and_pd(finite, _mm256_cmp_pd(magnitude[k], infinity, _CMP_LT_OQ));
+    largest = max4(largest, magnitude[k]);
+    above = _mm256_or_pd(above, _mm256_cmp_pd(b[k], zero, _CMP_GT_OQ));
+    below = _mm256_or_pd(below, _mm256_cmp_pd(b[k], zero, _CMP_LT_OQ));
+  }
+  const __m256d poorly_resolved =
+      _mm256_cmp_pd(largest, _mm256_mul_pd(_mm256_set1_pd(POORLY_RESOLVED_RATIO), error), _CMP_LE_OQ);
+  __m256d onward;
+  if constexpr (VINCENT) {
+    const __m256d at_an_end = _mm256_or_pd(_mm256_cmp_pd(magnitude[0], error, _CMP_LE_OQ),
+                                           _mm256_cmp_pd(magnitude[3], error, _CMP_LE_OQ));
+    onward = _mm256_or_pd(_mm256_and_pd(above, below), at_an_end);
+  } else {
+    // certainly_nonzero(b, error + 0).
+    const __m256d margin = _mm256_add_pd(error, zero), minus = _mm256_xor_pd(margin, _mm256_set1_pd(-0.0));
+    __m256d all_above = every, all_below = every;
+    for (int k = 0; k < 4; ++k) {
+      all_above = _mm256_and_pd(all_above, _mm256_cmp_pd(b[k], margin, _CMP_GT_OQ));
+      all_below = _mm256_and_pd(all_below, _mm256_cmp_pd(b[k], minus, _CMP_LT_OQ));
+    }
+    onward = _mm256_xor_pd(_mm256_or_pd(all_above, all_below), every);
+  }
+  return _mm256_movemask_pd(_mm256_and_pd(finite, _mm256_andnot_pd(poorly_resolved, onward)));
+}
+
 // The separation stage's first question (detail::coordinate_axes_apart over [0, 1] with the gap
 // thickness + tolerance * extent: vincent's detail::contact_distance with the contact tolerance,
 // conservative's thickness with 0), four tests at a time: bit j set when the boxes of the
@@ -318,19 +357,27 @@ DRAPE_AVX2 void merge_box4(Lanes3& box_lo, Lanes3& box_hi, const Lanes3& lo, con
 // the same decisions and need: the positions at t = 0 and t = 1 are start and start + motion
 // (what start + t * motion gives there, but for the sign of a zero, which no decision reads),
 // the same minima and maxima. Only read for tests that pass detail::stage_runs (finite
-// coordinates). need has room for count rounded up to four.
-template <QueryKind kind, class Pair>
+// coordinates). need has room for count rounded up to four. With it, stage: bit j set when
+// left[j] goes on to the stage at all (reaches_stage4; vincent's entry, or conservative's).
+template <QueryKind kind, bool VINCENT, class Pair>
 __attribute__((target("avx2"))) std::uint64_t whole_step_apart_avx2(const BatchInput& input, const Pair* pairs,
                                                                     const Left* left, int count, Scalar thickness_gap,
-                                                                    Scalar contact_tolerance, Scalar* need) {
+                                                                    Scalar contact_tolerance, Scalar* need,
+                                                                    std::uint64_t& stage) {
   constexpr int split = kind == QueryKind::VertexFace ? 1 : 2;  // points [0, split) are the first feature
   const __m256d thickness = _mm256_set1_pd(thickness_gap), tolerance = _mm256_set1_pd(contact_tolerance);
   const __m256d margin = _mm256_set1_pd(detail::PROJECTION_ERROR_FACTOR * UNIT_ROUNDOFF);
-  std::uint64_t apart_bits = 0;
+  std::uint64_t apart_bits = 0, stage_bits = 0;
   for (int j = 0; j < count; j += 4) {
     // Four tests (a tail repeats the last one; its bits are dropped below).
     const Left* const test[4] = {left + j, left + std::min(j + 1, count - 1), left + std::min(j + 2, count - 1),
                                  left + std::min(j + 3, count - 1)};
+    __m256d b[4];
+    for (int k = 0; k < 4; ++k)
+      b[k] = _mm256_set_pd(test[3]->cubic.b[k], test[2]->cubic.b[k], test[1]->cubic.b[k], test[0]->cubic.b[k]);
+    const __m256d error =
+        _mm256_set_pd(test[3]->cubic.error, test[2]->cubic.error, test[1]->cubic.error, test[0]->cubic.error);
+    stage_bits |= std::uint64_t(reaches_stage4<VINCENT>(b, error)) << j;
     const Pair* const pair[4] = {pairs + test[0]->index, pairs + test[1]->index, pairs + test[2]->index,
                                  pairs + test[3]->index};
     // Point 0 is always the first feature's, point 3 the second's; point 1 is the vertex-face
@@ -353,6 +400,7 @@ __attribute__((target("avx2"))) std::uint64_t whole_step_apart_avx2(const BatchI
                                        apart4(a_lo.z, a_hi.z, b_lo.z, b_hi.z, need4));
     apart_bits |= std::uint64_t(_mm256_movemask_pd(apart)) << j;
   }
+  stage = stage_bits & chunk_bits(std::size_t(count));
   return apart_bits & chunk_bits(std::size_t(count));
 }
 
@@ -537,26 +585,19 @@ void run_left(const BatchInput& input, std::span<const Pair> pairs, const Option
   const bool stage = options.separation_depth > 0 && detail::avx2_enabled();
   const bool vincent = options.method == Method::Vincent && stage;
   const bool conservative = options.method == Method::Conservative && options.thickness == 0 && stage;
-  // Whether the method asks the stage, as vincent_method and conservative_search decide it.
-  const auto reaches_stage = [&](const CoplanarityCubic& cubic) {
-    return vincent ? detail::vincent_entry(cubic) == detail::VincentEntry::Stage
-                   : detail::conservative_entry(cubic, 0) == detail::ConservativeEntry::Stage;
-  };
   alignas(32) Scalar need[LEFT_MAX + 3];
-  std::uint64_t whole_step_apart = 0, within = 0, decided = 0, apart = 0;
+  // Bits of left: the tests that go on to the separation stage (as vincent_method and
+  // conservative_search decide it), and what the stage decided of them here.
+  std::uint64_t within = 0, whole_step_apart = 0, decided = 0, apart = 0;
   if (vincent || conservative) {
-    whole_step_apart = whole_step_apart_avx2<kind>(input, pairs.data(), left, count, options.thickness,
-                                                   vincent ? options.contact_tolerance : 0, need);
-    // The tests that ask the stage and whose whole step's boxes were not apart: the rest of the
-    // stage four at a time.
+    whole_step_apart =
+        vincent ? whole_step_apart_avx2<kind, true>(input, pairs.data(), left, count, options.thickness,
+                                                    options.contact_tolerance, need, within)
+                : whole_step_apart_avx2<kind, false>(input, pairs.data(), left, count, 0, 0, need, within);
+    // The tests whose whole step's boxes were not apart: the rest of the stage four at a time.
     int asked[LEFT_MAX], asked_count = 0;
-    for (int j = 0; j < count; ++j) {
-      const CoplanarityCubic& cubic = left[j].cubic;
-      if (reaches_stage(cubic) && detail::stage_runs(cubic, options.separation_depth)) {
-        within |= std::uint64_t(1) << j;
-        if (!((whole_step_apart >> j) & 1)) asked[asked_count++] = j;
-      }
-    }
+    for (std::uint64_t rest = within & ~whole_step_apart; rest != 0; rest &= rest - 1)
+      asked[asked_count++] = __builtin_ctzll(rest);
     for (int g = 0; g < asked_count; g += 4) {
       int lane[4];
       for (int l = 0; l < 4; ++l) lane[l] = asked[std::min(g + l, asked_count - 1)];
@@ -571,6 +612,11 @@ void run_left(const BatchInput& input, std::span<const Pair> pairs, const Option
   }
   for (int j = 0; j < count; ++j) {
     const std::uint64_t bit = std::uint64_t(1) << j;
+    assert(!(vincent || conservative) ||
+           bool(within & bit) == (detail::stage_runs(left[j].cubic, options.separation_depth) &&
+                                  (vincent ? detail::vincent_entry(left[j].cubic) == detail::VincentEntry::Stage
+                                           : detail::conservative_entry(left[j].cubic, 0) ==
+                                                 detail::ConservativeEntry::Stage)));
     detail::StageAsked asked;  // nothing
     if (within & bit) {
       if ((whole_step_apart | apart) & bit) {
