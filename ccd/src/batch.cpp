@@ -164,14 +164,18 @@ struct Lanes3 {
 };
 
 // Point `point` (of the pair's points in query order) of four tests, one coordinate per
-// register; the indices read straight from the pairs.
+// register; the indices read straight from the pairs. Each point's (x, y) and (y, z) as two
+// 128-bit loads, the tests' pairs interleaved: seven instructions where z alone took five
+// (a load per test and the shuffles to gather them).
 template <class Pair>
 DRAPE_AVX2 Lanes3 load4_point(const Vec3* base, const Pair* const (&pair)[4], int point) {
   const double *p0 = base[points(*pair[0])[point]].data(), *p1 = base[points(*pair[1])[point]].data(),
                *p2 = base[points(*pair[2])[point]].data(), *p3 = base[points(*pair[3])[point]].data();
   const __m256d xy02 = _mm256_insertf128_pd(_mm256_castpd128_pd256(_mm_loadu_pd(p0)), _mm_loadu_pd(p2), 1);
   const __m256d xy13 = _mm256_insertf128_pd(_mm256_castpd128_pd256(_mm_loadu_pd(p1)), _mm_loadu_pd(p3), 1);
-  return {_mm256_unpacklo_pd(xy02, xy13), _mm256_unpackhi_pd(xy02, xy13), _mm256_set_pd(p3[2], p2[2], p1[2], p0[2])};
+  const __m256d yz02 = _mm256_insertf128_pd(_mm256_castpd128_pd256(_mm_loadu_pd(p0 + 1)), _mm_loadu_pd(p2 + 1), 1);
+  const __m256d yz13 = _mm256_insertf128_pd(_mm256_castpd128_pd256(_mm_loadu_pd(p1 + 1)), _mm_loadu_pd(p3 + 1), 1);
+  return {_mm256_unpacklo_pd(xy02, xy13), _mm256_unpacklo_pd(yz02, yz13), _mm256_unpackhi_pd(yz02, yz13)};
 }
 
 // Point k in coplanarity order.
@@ -209,69 +213,81 @@ DRAPE_AVX2 __m256d norm4(const Lanes3& u) {
 // more registers alive).
 enum class Apart { No, AtZeroThickness, WithThickness };
 
+// Tests i to i + 3 of a chunk, the pairs pair, into c's arrays at i and bits i to i + 3 of
+// culled and (with APART) apart.
+template <QueryKind kind, Apart APART, class Pair>
+DRAPE_AVX2 void cubics4(const BatchInput& input, const Pair* const (&pair)[4], Scalar thickness, ChunkCubics& c,
+                        std::size_t i, std::uint64_t& culled_bits, std::uint64_t& apart_bits) {
+  constexpr Scalar unit_roundoff = std::numeric_limits<Scalar>::epsilon() / 2;
+  const __m256d zero = _mm256_setzero_pd();
+  const Vec3 *start = input.start.data(), *end = input.end.data();
+  const Lanes3 s1 = load4<kind, 0>(start, pair), e1 = load4<kind, 0>(end, pair);
+  const Lanes3 A0 = sub4(load4<kind, 1>(start, pair), s1), A1 = sub4(load4<kind, 1>(end, pair), e1);
+  const Lanes3 s3 = load4<kind, 2>(start, pair), e3 = load4<kind, 2>(end, pair);
+  const Lanes3 s4 = load4<kind, 3>(start, pair), e4 = load4<kind, 3>(end, pair);
+  const Lanes3 B0 = sub4(s3, s1), B1 = sub4(e3, e1);
+  const Lanes3 C0 = sub4(s4, s1), C1 = sub4(e4, e1);
+  const Lanes3 b0c0 = cross4(B0, C0), b1c0 = cross4(B1, C0), b0c1 = cross4(B0, C1), b1c1 = cross4(B1, C1);
+  const __m256d three = _mm256_set1_pd(3.0);
+  const __m256d k0 = dot4(A0, b0c0);
+  const __m256d k1 = _mm256_div_pd(_mm256_add_pd(_mm256_add_pd(dot4(A1, b0c0), dot4(A0, b1c0)), dot4(A0, b0c1)), three);
+  const __m256d k2 = _mm256_div_pd(_mm256_add_pd(_mm256_add_pd(dot4(A1, b1c0), dot4(A1, b0c1)), dot4(A0, b1c1)), three);
+  const __m256d k3 = dot4(A1, b1c1);
+  const __m256d a = l1_4(A0, A1), b = l1_4(B0, B1), cc = l1_4(C0, C1);
+  const __m256d e = _mm256_mul_pd(
+      _mm256_mul_pd(_mm256_mul_pd(_mm256_set1_pd(Scalar(COPLANARITY_ERROR_FACTOR) * unit_roundoff), a), b), cc);
+  _mm256_store_pd(&c.coefficient[0][i], k0);
+  _mm256_store_pd(&c.coefficient[1][i], k1);
+  _mm256_store_pd(&c.coefficient[2][i], k2);
+  _mm256_store_pd(&c.coefficient[3][i], k3);
+  _mm256_store_pd(&c.error[i], e);
+  _mm256_store_pd(&c.extent[i], max4(max4(a, b), cc));
+  const __m256d largest = max4(max4(abs4(k0), abs4(k1)), max4(abs4(k2), abs4(k3)));
+  const __m256d lo = min4(min4(k0, k1), min4(k2, k3)), hi = max4(max4(k0, k1), max4(k2, k3));
+  const __m256d resolved = _mm256_cmp_pd(largest, _mm256_mul_pd(_mm256_set1_pd(POORLY_RESOLVED_RATIO), e), _CMP_NLE_UQ);
+  const __m256d one_sign = _mm256_or_pd(_mm256_cmp_pd(lo, zero, _CMP_GT_OQ), _mm256_cmp_pd(hi, zero, _CMP_LT_OQ));
+  const __m256d ends_clear = _mm256_cmp_pd(min4(abs4(k0), abs4(k3)), e, _CMP_GT_OQ);
+  culled_bits |= std::uint64_t(_mm256_movemask_pd(_mm256_and_pd(_mm256_and_pd(resolved, one_sign), ends_clear))) << i;
+  if constexpr (APART != Apart::No) {
+    // The margin: the error, plus with a thickness conservative.cpp's thickness_to_cubic
+    // lane by lane (the longer of each of two edges at the two ends of the step: the vertex-
+    // face test's triangle edges from its first vertex, A and B; the edge-edge test's edges,
+    // A and x4 - x3 from the points themselves, as the scalar code subtracts them).
+    __m256d m = e;
+    if constexpr (APART == Apart::WithThickness) {
+      const __m256d first = max4(norm4(A0), norm4(A1));
+      const __m256d second = kind == QueryKind::VertexFace ? max4(norm4(B0), norm4(B1))
+                                                           : max4(norm4(sub4(s4, s3)), norm4(sub4(e4, e3)));
+      const __m256d share = _mm256_mul_pd(_mm256_mul_pd(_mm256_set1_pd(thickness), _mm256_mul_pd(first, second)),
+                                          _mm256_set1_pd(1 + 16 * UNIT_ROUNDOFF));
+      m = _mm256_add_pd(e, share);
+    }
+    const __m256d minus_m = _mm256_sub_pd(zero, m);
+    const __m256d above =
+        _mm256_and_pd(_mm256_and_pd(_mm256_cmp_pd(k0, m, _CMP_GT_OQ), _mm256_cmp_pd(k1, m, _CMP_GT_OQ)),
+                      _mm256_and_pd(_mm256_cmp_pd(k2, m, _CMP_GT_OQ), _mm256_cmp_pd(k3, m, _CMP_GT_OQ)));
+    const __m256d below =
+        _mm256_and_pd(_mm256_and_pd(_mm256_cmp_pd(k0, minus_m, _CMP_LT_OQ), _mm256_cmp_pd(k1, minus_m, _CMP_LT_OQ)),
+                      _mm256_and_pd(_mm256_cmp_pd(k2, minus_m, _CMP_LT_OQ), _mm256_cmp_pd(k3, minus_m, _CMP_LT_OQ)));
+    apart_bits |= std::uint64_t(_mm256_movemask_pd(_mm256_and_pd(resolved, _mm256_or_pd(above, below)))) << i;
+  }
+}
+
 // Tests [0, n) of pairs, n <= CHUNK, into c (the arrays a0..c1 are not filled); with APART
 // also c.certainly_apart (the conservative method's first question), else it stays 0.
 template <QueryKind kind, Apart APART, class Pair>
 __attribute__((target("avx2"))) void gather_cubics_avx2(const BatchInput& input, const Pair* pairs, std::size_t n,
                                                         Scalar thickness, ChunkCubics& c) {
-  constexpr Scalar unit_roundoff = std::numeric_limits<Scalar>::epsilon() / 2;
-  const __m256d zero = _mm256_setzero_pd();
-  const Vec3 *start = input.start.data(), *end = input.end.data();
   std::uint64_t culled_bits = 0, apart_bits = 0;
-  for (std::size_t i = 0; i < n; i += 4) {
-    // Four tests (a tail repeats the last test; its bits are dropped below).
+  std::size_t i = 0;
+  for (; i + 4 <= n; i += 4) {
+    const Pair* const pair[4] = {pairs + i, pairs + i + 1, pairs + i + 2, pairs + i + 3};
+    cubics4<kind, APART>(input, pair, thickness, c, i, culled_bits, apart_bits);
+  }
+  if (i < n) {  // the tail repeats the last test; its bits are dropped below
     const Pair* const pair[4] = {pairs + i, pairs + std::min(i + 1, n - 1), pairs + std::min(i + 2, n - 1),
-                                 pairs + std::min(i + 3, n - 1)};
-    const Lanes3 s1 = load4<kind, 0>(start, pair), e1 = load4<kind, 0>(end, pair);
-    const Lanes3 A0 = sub4(load4<kind, 1>(start, pair), s1), A1 = sub4(load4<kind, 1>(end, pair), e1);
-    const Lanes3 s3 = load4<kind, 2>(start, pair), e3 = load4<kind, 2>(end, pair);
-    const Lanes3 s4 = load4<kind, 3>(start, pair), e4 = load4<kind, 3>(end, pair);
-    const Lanes3 B0 = sub4(s3, s1), B1 = sub4(e3, e1);
-    const Lanes3 C0 = sub4(s4, s1), C1 = sub4(e4, e1);
-    const Lanes3 b0c0 = cross4(B0, C0), b1c0 = cross4(B1, C0), b0c1 = cross4(B0, C1), b1c1 = cross4(B1, C1);
-    const __m256d three = _mm256_set1_pd(3.0);
-    const __m256d k0 = dot4(A0, b0c0);
-    const __m256d k1 = _mm256_div_pd(_mm256_add_pd(_mm256_add_pd(dot4(A1, b0c0), dot4(A0, b1c0)), dot4(A0, b0c1)), three);
-    const __m256d k2 = _mm256_div_pd(_mm256_add_pd(_mm256_add_pd(dot4(A1, b1c0), dot4(A1, b0c1)), dot4(A0, b1c1)), three);
-    const __m256d k3 = dot4(A1, b1c1);
-    const __m256d a = l1_4(A0, A1), b = l1_4(B0, B1), cc = l1_4(C0, C1);
-    const __m256d e = _mm256_mul_pd(
-        _mm256_mul_pd(_mm256_mul_pd(_mm256_set1_pd(Scalar(COPLANARITY_ERROR_FACTOR) * unit_roundoff), a), b), cc);
-    _mm256_store_pd(&c.coefficient[0][i], k0);
-    _mm256_store_pd(&c.coefficient[1][i], k1);
-    _mm256_store_pd(&c.coefficient[2][i], k2);
-    _mm256_store_pd(&c.coefficient[3][i], k3);
-    _mm256_store_pd(&c.error[i], e);
-    _mm256_store_pd(&c.extent[i], max4(max4(a, b), cc));
-    const __m256d largest = max4(max4(abs4(k0), abs4(k1)), max4(abs4(k2), abs4(k3)));
-    const __m256d lo = min4(min4(k0, k1), min4(k2, k3)), hi = max4(max4(k0, k1), max4(k2, k3));
-    const __m256d resolved = _mm256_cmp_pd(largest, _mm256_mul_pd(_mm256_set1_pd(POORLY_RESOLVED_RATIO), e), _CMP_NLE_UQ);
-    const __m256d one_sign = _mm256_or_pd(_mm256_cmp_pd(lo, zero, _CMP_GT_OQ), _mm256_cmp_pd(hi, zero, _CMP_LT_OQ));
-    const __m256d ends_clear = _mm256_cmp_pd(min4(abs4(k0), abs4(k3)), e, _CMP_GT_OQ);
-    culled_bits |= std::uint64_t(_mm256_movemask_pd(_mm256_and_pd(_mm256_and_pd(resolved, one_sign), ends_clear))) << i;
-    if constexpr (APART != Apart::No) {
-      // The margin: the error, plus with a thickness conservative.cpp's thickness_to_cubic
-      // lane by lane (the longer of each of two edges at the two ends of the step: the vertex-
-      // face test's triangle edges from its first vertex, A and B; the edge-edge test's edges,
-      // A and x4 - x3 from the points themselves, as the scalar code subtracts them).
-      __m256d m = e;
-      if constexpr (APART == Apart::WithThickness) {
-        const __m256d first = max4(norm4(A0), norm4(A1));
-        const __m256d second = kind == QueryKind::VertexFace ? max4(norm4(B0), norm4(B1))
-                                                             : max4(norm4(sub4(s4, s3)), norm4(sub4(e4, e3)));
-        const __m256d share = _mm256_mul_pd(_mm256_mul_pd(_mm256_set1_pd(thickness), _mm256_mul_pd(first, second)),
-                                            _mm256_set1_pd(1 + 16 * UNIT_ROUNDOFF));
-        m = _mm256_add_pd(e, share);
-      }
-      const __m256d minus_m = _mm256_sub_pd(zero, m);
-      const __m256d above =
-          _mm256_and_pd(_mm256_and_pd(_mm256_cmp_pd(k0, m, _CMP_GT_OQ), _mm256_cmp_pd(k1, m, _CMP_GT_OQ)),
-                        _mm256_and_pd(_mm256_cmp_pd(k2, m, _CMP_GT_OQ), _mm256_cmp_pd(k3, m, _CMP_GT_OQ)));
-      const __m256d below =
-          _mm256_and_pd(_mm256_and_pd(_mm256_cmp_pd(k0, minus_m, _CMP_LT_OQ), _mm256_cmp_pd(k1, minus_m, _CMP_LT_OQ)),
-                        _mm256_and_pd(_mm256_cmp_pd(k2, minus_m, _CMP_LT_OQ), _mm256_cmp_pd(k3, minus_m, _CMP_LT_OQ)));
-      apart_bits |= std::uint64_t(_mm256_movemask_pd(_mm256_and_pd(resolved, _mm256_or_pd(above, below)))) << i;
-    }
+                                 pairs + n - 1};
+    cubics4<kind, APART>(input, pair, thickness, c, i, culled_bits, apart_bits);
   }
   c.culled = culled_bits & chunk_bits(n);
   c.certainly_apart = apart_bits & chunk_bits(n);
