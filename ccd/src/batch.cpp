@@ -626,22 +626,28 @@ void run_left(const BatchInput& input, std::span<const Pair> pairs, const Option
       }
     }
   }
-  for (int j = 0; j < count; ++j) {
-    const std::uint64_t bit = std::uint64_t(1) << j;
+#ifndef NDEBUG
+  for (int j = 0; j < count; ++j)
     assert(!(vincent || conservative) ||
-           bool(within & bit) == (detail::stage_runs(left[j].cubic, options.separation_depth) &&
-                                  (vincent ? detail::vincent_entry(left[j].cubic) == detail::VincentEntry::Stage
-                                           : detail::conservative_entry(left[j].cubic, 0) ==
-                                                 detail::ConservativeEntry::Stage)));
+           bool((within >> j) & 1) ==
+               (detail::stage_runs(left[j].cubic, options.separation_depth) &&
+                (vincent ? detail::vincent_entry(left[j].cubic) == detail::VincentEntry::Stage
+                         : detail::conservative_entry(left[j].cubic, 0) == detail::ConservativeEntry::Stage)));
+#endif
+  // The tests the stage separated here, counted at once as roots_apart's answer (Separated).
+  const std::uint64_t separated = within & (whole_step_apart | apart);
+  const auto separated_count = static_cast<std::uint64_t>(__builtin_popcountll(separated));
+  counters.tests += separated_count;
+  counters.culled += separated_count;
+  counters.separated += separated_count;
+  // The others, in order, through the method with what the stage decided of them.
+  for (std::uint64_t rest = chunk_bits(std::size_t(count)) & ~separated; rest != 0; rest &= rest - 1) {
+    const int j = __builtin_ctzll(rest);
+    const std::uint64_t bit = std::uint64_t(1) << j;
     detail::StageAsked asked;  // nothing
-    if (within & bit) {
-      if ((whole_step_apart | apart) & bit) {
-        counters.add(Result{.path = Path::Separated});  // what roots_apart decides there
-        continue;
-      }
+    if (within & bit)
       asked = (decided & bit) ? detail::StageAsked{detail::StageAsked::Part::All}
                               : detail::StageAsked{detail::StageAsked::Part::WholeStep, need[j]};
-    }
     const Result result =
         detail::run_unculled(kind, gather(input, pairs[left[j].index]), options, left[j].cubic, asked);
     counters.add(result);
