@@ -239,7 +239,14 @@ T refine_single_root(const std::array<T, 4>& b, T tolerance) {
     const T slope = (3 * a[3] * s + 2 * a[2]) * s + a[1];
     const T next = slope != 0 ? s - f / slope : lo;
     if (!(next > lo && next < hi)) {
-      s = T(0.5) * (lo + hi);  // Newton left the bracket: bisect
+      // Newton left the bracket: bisect. Where the midpoint rounds to s (a bound now), lo and
+      // hi are adjacent numbers and every further iteration repeats this one, with the same
+      // answer at the end: return it now (a tolerance below the spacing of the numbers near
+      // the root, as the conservative search's monotone windows ask, would take all
+      // MAX_ITERATIONS).
+      const T mid = T(0.5) * (lo + hi);
+      if (mid == s) break;
+      s = mid;
     } else if (std::abs(next - s) <= tolerance) {
       return next;  // Newton converged
     } else {

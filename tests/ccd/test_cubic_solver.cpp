@@ -1,6 +1,9 @@
 // The closed-form cubic solver and the bracketed root refinement.
 #include <gtest/gtest.h>
 
+#include <cstring>
+#include <random>
+
 #include "drape/ccd/cubic_solver.h"
 #include "problem.h"
 
@@ -70,4 +73,64 @@ TEST(RootRefinement, FindsTheBracketedRootToTolerance) {
   const Bernstein3 b = to_bernstein(a);
   const std::array<long double, 4> bl{b[0], b[1], b[2], b[3]};
   EXPECT_NEAR(double(detail::refine_single_root<long double>(bl, 1e-17L)), 0.3, 1e-15);
+}
+
+namespace {
+
+// refine_single_root as it was before it stopped at a bracket that cannot shrink: all
+// MAX_ITERATIONS (100) run there.
+template <class T>
+T refine_every_iteration(const std::array<T, 4>& b, T tolerance) {
+  const std::array<T, 4> a{b[0], 3 * (b[1] - b[0]), 3 * (b[2] - 2 * b[1] + b[0]), b[3] - 3 * b[2] + 3 * b[1] - b[0]};
+  const T first = b[0] != 0 ? b[0] : (b[1] != 0 ? b[1] : b[2]);
+  const bool negative_at_lo = first < 0;
+  T lo = 0, hi = 1, s = T(0.5);
+  for (int iteration = 0; iteration < 100; ++iteration) {
+    const T f = ((a[3] * s + a[2]) * s + a[1]) * s + a[0];
+    if (f == 0) return s;
+    if ((f < 0) == negative_at_lo) lo = s; else hi = s;
+    if (hi - lo <= tolerance) break;
+    const T slope = (3 * a[3] * s + 2 * a[2]) * s + a[1];
+    const T next = slope != 0 ? s - f / slope : lo;
+    if (!(next > lo && next < hi)) {
+      s = T(0.5) * (lo + hi);
+    } else if (std::abs(next - s) <= tolerance) {
+      return next;
+    } else {
+      s = next;
+    }
+  }
+  return T(0.5) * (lo + hi);
+}
+
+template <class T>
+void expect_same_roots_as_every_iteration() {
+  std::mt19937_64 random(11);
+  std::uniform_real_distribution<double> unit(0.0, 1.0);
+  int below_spacing = 0;
+  for (int i = 0; i < 20000; ++i) {
+    // A cubic with one root in (0, 1), the others outside, scaled and perturbed.
+    const double root = unit(random), scale = std::ldexp(1.0, int(unit(random) * 60) - 30);
+    Bernstein3 b = to_bernstein(from_roots(root, 1.0 + 4 * unit(random), -1.0 - 4 * unit(random)));
+    for (Scalar& c : b) c *= scale;
+    if (sign_variations(b) != 1) continue;
+    const std::array<T, 4> bt{T(b[0]), T(b[1]), T(b[2]), T(b[3])};
+    // Tolerances from 1e-3 down to far below the spacing of the numbers near the root.
+    const T tolerance = T(std::pow(10.0, -3 - 30 * unit(random)));
+    below_spacing += tolerance < std::numeric_limits<T>::epsilon() * T(root) / 2;
+    const T fast = detail::refine_single_root<T>(bt, tolerance), full = refine_every_iteration<T>(bt, tolerance);
+    ASSERT_EQ(std::memcmp(&fast, &full, sizeof(T) > 8 ? 10 : sizeof(T)), 0)
+        << "root " << root << " tolerance " << double(tolerance);
+  }
+  EXPECT_GT(below_spacing, 1000);
+}
+
+}  // namespace
+
+// The conservative search refines its monotone windows' roots to a tolerance below what the
+// numbers can resolve; the refinement stops where its bracket can no longer shrink. Bit for bit
+// what all its iterations gave, in double and in long double (80 bits compared).
+TEST(RootRefinement, StopsWhereTheBracketCannotShrinkWithTheSameRoot) {
+  expect_same_roots_as_every_iteration<double>();
+  expect_same_roots_as_every_iteration<long double>();
 }
