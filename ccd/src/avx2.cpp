@@ -10,4 +10,11 @@ const bool cpu_has_avx2 = [] {
   return __builtin_cpu_supports("avx2") != 0;
 }();
 
+bool avx2_only = false;
+
+const bool cpu_has_avx512 = [] {
+  __builtin_cpu_init();
+  return __builtin_cpu_supports("avx512f") != 0 && __builtin_cpu_supports("avx512dq") != 0;
+}();
+
 }  // namespace drape::ccd::detail

@@ -23,6 +23,14 @@ extern bool portable_kernels;
 /// Whether the AVX2 kernels run (called per query: a load and a test).
 inline bool avx2_enabled() { return cpu_has_avx2 && !portable_kernels; }
 
+/// Whether this machine has AVX-512 F and DQ, asked once at start-up (avx2.cpp); and, for
+/// tests only, the AVX2 batch kernel even where the AVX-512 one could run (the same bits).
+extern const bool cpu_has_avx512;
+extern bool avx2_only;
+
+/// Whether the batch's cubic kernel runs eight tests at a time (batch.cpp).
+inline bool avx512_enabled() { return avx2_enabled() && cpu_has_avx512 && !avx2_only; }
+
 /// std::max(a, b) and std::min(a, b) lane by lane, NaN and signed zeros included: b where
 /// a < b (b < a), else a. maxpd(x, y) is x > y ? x : y and minpd(x, y) is x < y ? x : y, so
 /// with the operands swapped they are exactly these.

@@ -103,8 +103,10 @@ TEST(Batch, EveryChunkTailMatchesElementaryCalls) {
   const std::vector<VertexFacePair> all_vf = vertex_face_pairs(set);
   const std::vector<EdgeEdgePair> all_ee = edge_edge_pairs(set);
   std::size_t offset = 0;
-  for (const bool portable : {false, true})
-    for (const std::size_t n : {1, 2, 3, 4, 5, 7, 63, 64, 65, 67, 130, 191}) {
+  // The kernels: the widest the machine has (AVX-512 or AVX2), AVX2 alone, the portable loop.
+  enum class Kernel { Widest, Avx2, Portable };
+  for (const Kernel kernel : {Kernel::Widest, Kernel::Avx2, Kernel::Portable})
+    for (const std::size_t n : {1, 2, 3, 4, 5, 7, 8, 9, 15, 63, 64, 65, 67, 130, 191}) {
       offset = (offset + 977) % (all_vf.size() - 200);  // a different stretch of tests each time
       const std::vector<VertexFacePair> vf(all_vf.begin() + offset, all_vf.begin() + offset + n);
       const std::vector<EdgeEdgePair> ee(all_ee.begin() + offset, all_ee.begin() + offset + n);
@@ -112,19 +114,29 @@ TEST(Batch, EveryChunkTailMatchesElementaryCalls) {
       for (const Scalar thickness : {0.0, 0.01})
         for (Method method : ALL_METHODS) {
           SCOPED_TRACE(std::string(method_name(method)) + " n " + std::to_string(n) + " thickness " +
-                       std::to_string(thickness) + (portable ? " portable" : ""));
+                       std::to_string(thickness) + " kernel " + std::to_string(int(kernel)));
           Options options;
           options.method = method;
           options.thickness = thickness;
-          detail::portable_kernels = portable;
+          detail::portable_kernels = kernel == Kernel::Portable;
+          detail::avx2_only = kernel == Kernel::Avx2;
           expect_batch_matches_elementary_calls(input, options);
           detail::portable_kernels = false;
+          detail::avx2_only = false;
         }
     }
 }
 
 // On this machine the AVX2 kernel where it has AVX2, and the portable one on every machine.
 TEST(Batch, MatchesElementaryCallsAndCounts) { check_batch_against_elementary_calls(); }
+
+// Where the machine has AVX-512, the AVX2 kernel too.
+TEST(Batch, Avx2KernelMatchesElementaryCallsAndCounts) {
+  if (!detail::cpu_has_avx512) GTEST_SKIP() << "no AVX-512 on this machine: the AVX2 kernel ran above";
+  detail::avx2_only = true;
+  check_batch_against_elementary_calls();
+  detail::avx2_only = false;
+}
 
 TEST(Batch, PortableKernelMatchesElementaryCallsAndCounts) {
   detail::portable_kernels = true;
