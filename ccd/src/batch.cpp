@@ -299,9 +299,11 @@ __attribute__((target("avx2"))) void gather_cubics_avx2(const BatchInput& input,
 // spills. Only the loads and the comparisons (masks instead of vectors) differ in form.
 #define DRAPE_AVX512 __attribute__((target("avx512f,avx512dq"), always_inline)) inline
 // GCC 12's AVX-512 intrinsics pass an uninitialised source that their full mask never reads,
-// and -Wmaybe-uninitialized reports it (fixed in GCC 13).
+// and -Wmaybe-uninitialized reports it (fixed in GCC 13; clang has no such warning).
+#if defined(__GNUC__) && !defined(__clang__)
 #pragma GCC diagnostic push
 #pragma GCC diagnostic ignored "-Wmaybe-uninitialized"
+#endif
 
 struct Lanes8 {
   __m512d x, y, z;
@@ -434,7 +436,9 @@ __attribute__((target("avx512f,avx512dq"))) void gather_cubics_avx512(const Batc
   c.culled = culled_bits & chunk_bits(n);
   c.certainly_apart = apart_bits & chunk_bits(n);
 }
+#if defined(__GNUC__) && !defined(__clang__)
 #pragma GCC diagnostic pop
+#endif
 
 // A test the chunk's decisions left (not culled by the filter, not certainly apart for
 // conservative), with its cubic: run a few chunks' worth at a time.
