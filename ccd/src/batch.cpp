@@ -740,8 +740,9 @@ __attribute__((target("avx2"))) StageLanes stage_within_avx2(const BatchInput& i
 }
 
 // The tests the chunks' decisions left, in order: the full method on the gathered query. For
-// vincent, and conservative at zero thickness, the separation stage's first question is asked
-// here four tests at a time, and the tests it separates need nothing else.
+// vincent, and conservative at zero thickness, the separation stage is asked here four tests at
+// a time (the whole step's boxes, then the rest of it for the tests those do not separate), and
+// the tests it separates need nothing else; the others take what it decided to the method.
 template <QueryKind kind, class Pair>
 void run_left(const BatchInput& input, std::span<const Pair> pairs, const Options& options, const Left* left,
               int count, BatchCounters& counters, std::vector<BatchHit>& hits) {
