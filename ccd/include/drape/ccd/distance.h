@@ -185,43 +185,74 @@ struct DistanceEstimate {
 /// Safety factor of the conditioning bounds below, in units of the unit roundoff.
 inline constexpr Scalar CONDITIONING_ERROR_FACTOR = 16.0;
 
-/// Point-triangle distance. The face-region formulas lose accuracy as the triangle thins
-/// (error about u |ap| l^2 / |n|, l the longest edge, |n| twice the area); the edges alone
-/// overestimate by at most the triangle's width |n| / l. The smaller bound is used.
+/// Safety factor of the rounding margin of the estimates' inside tests below (a triple product
+/// of a cross product with the normal, each rounded: about 11 u l^3 |offset|), in units of u.
+inline constexpr Scalar INSIDE_MARGIN_FACTOR = 32.0;
+
+/// Point-triangle distance, never more than error above the true one (but for the rounding of
+/// the positions themselves). Where the triangle is well enough shaped, the distance to its
+/// plane (error about u |ap| l^2 / |n|, l the longest edge, |n| twice the area), taken when the
+/// point projects inside the triangle by sign tests widened by their rounding, else the
+/// distance to its edges; both never exceed the true distance by more than their rounding.
+/// (Barycentric weights from the closest-point regions are off by u l^4 / |n|^2, and the point
+/// they give by l times that: on a thin triangle, far more than the plane distance's error.)
+/// On a thinner triangle the edges alone, which overestimate by at most its width |n| / l.
 template <class T>
 DistanceEstimate<T> point_triangle_distance(const Vector3<T>& p, const Vector3<T>& a, const Vector3<T>& b,
                                             const Vector3<T>& c) {
   const T u = std::numeric_limits<T>::epsilon() / 2;
-  const Vector3<T> ab = b - a, ac = c - a;
+  const Vector3<T> ab = b - a, ac = c - a, ap = p - a;
   const T longest = std::sqrt(std::max({ab.squaredNorm(), ac.squaredNorm(), (c - b).squaredNorm()}));
-  const T twice_area = ab.cross(ac).norm();
-  const T local = std::max(longest, (p - a).norm());
+  const Vector3<T> n = ab.cross(ac);
+  const T twice_area = n.norm();
+  const T local = std::max(longest, ap.norm());
   const T face_error = T(CONDITIONING_ERROR_FACTOR) * u * local * longest * longest / twice_area;
   const T width = longest > 0 ? twice_area / longest : T(0);
   DistanceEstimate<T> out;
-  const auto closest = (twice_area > 0 && face_error < width) ? closest_point_triangle<T>(p, a, b, c)
-                                                               : detail::closest_on_edges<T>(p, a, b, c);
+  if (twice_area > 0 && face_error < width) {
+    // Signed areas of the point's projection against each edge, times |n|^2: all >= 0 inside.
+    const T weight_a = (c - b).cross(p - b).dot(n), weight_b = (a - c).cross(p - c).dot(n);
+    const T weight_c = ab.cross(ap).dot(n);
+    const T margin = T(INSIDE_MARGIN_FACTOR) * u * longest * longest * longest * local;
+    if (weight_a >= -margin && weight_b >= -margin && weight_c >= -margin) {
+      const T n2 = twice_area * twice_area;
+      out.distance = std::abs(ap.dot(n)) / twice_area;
+      out.error = face_error;
+      out.param0 = std::clamp<T>(weight_b / n2, 0, 1);
+      out.param1 = std::clamp<T>(weight_c / n2, 0, 1);
+      return out;
+    }
+  }
+  // Outside the triangle (certainly, in the branch above), or too thin: its edges.
+  const auto closest = detail::closest_on_edges<T>(p, a, b, c);
   out.distance = std::sqrt(closest.distance_squared);
-  out.error = (twice_area > 0 && face_error < width) ? face_error : width + T(CONDITIONING_ERROR_FACTOR) * u * local;
+  out.error = (twice_area > 0 && face_error < width) ? T(CONDITIONING_ERROR_FACTOR) * u * local
+                                                     : width + T(CONDITIONING_ERROR_FACTOR) * u * local;
   out.param0 = closest.weight_b;
   out.param1 = closest.weight_c;
   return out;
 }
 
-/// Segment-segment distance. The interior formulas lose accuracy as the segments turn
-/// parallel (error about u (|r| + l) / sin(angle)); the four endpoint-to-segment distances alone
-/// overestimate by at most l sin(angle), l the longer segment. The smaller bound is used.
+/// Segment-segment distance, never more than error above the true one (but for the rounding of
+/// the positions). The four endpoint-to-segment distances, and, where the segments are far
+/// enough from parallel, the distance between their lines (error about u (|w| + l) l^2 / |n|,
+/// n = da x db, w = b0 - a0) when both closest points of the lines lie within the segments by
+/// sign tests widened by their rounding (else the segments' closest pair has an endpoint). Nearer
+/// parallel, the endpoints alone, which overestimate by at most l sin(angle), l the longer segment.
 template <class T>
 DistanceEstimate<T> segment_segment_distance(const Vector3<T>& a0, const Vector3<T>& a1, const Vector3<T>& b0,
                                              const Vector3<T>& b1) {
   const T u = std::numeric_limits<T>::epsilon() / 2;
-  const Vector3<T> da = a1 - a0, db = b1 - b0;
+  const Vector3<T> da = a1 - a0, db = b1 - b0, w = b0 - a0;
   const T la = da.norm(), lb = db.norm();
   const T longest = std::max(la, lb);
-  const T local = longest + (a0 - b0).norm();
-  const T sine = (la > 0 && lb > 0) ? std::min<T>(da.cross(db).norm() / (la * lb) + 4 * u, 1) : T(1);
-  const T interior_error = T(CONDITIONING_ERROR_FACTOR) * u * local / sine;
-  const T endpoint_error = longest * sine + T(CONDITIONING_ERROR_FACTOR) * u * local;
+  const T local = longest + w.norm();
+  const Vector3<T> n = da.cross(db);
+  const T n_norm = n.norm();
+  const T sine = (la > 0 && lb > 0) ? std::min<T>(n_norm / (la * lb) + 4 * u, 1) : T(1);
+  const T line_error = T(CONDITIONING_ERROR_FACTOR) * u * local * longest * longest / n_norm;
+  const T rounding = T(CONDITIONING_ERROR_FACTOR) * u * local;
+  const T endpoint_error = longest * sine + rounding;
 
   // The four endpoint-to-segment distances (squared; one square root at the end).
   DistanceEstimate<T> out;
@@ -240,17 +271,22 @@ DistanceEstimate<T> segment_segment_distance(const Vector3<T>& a0, const Vector3
     }
   }
   out.distance = std::sqrt(best);
-  if (interior_error < endpoint_error) {
-    const auto c = closest_segment_segment<T>(a0, a1, b0, b1);
-    const T d = std::sqrt(c.distance_squared);
-    if (d < out.distance) {
-      out.distance = d;
-      out.param0 = c.s;
-      out.param1 = c.u;
-    }
-    out.error = interior_error;
-  } else {
+  if (!(n_norm > 0 && line_error < endpoint_error)) {
     out.error = endpoint_error;
+    return out;
+  }
+  out.error = std::max(line_error, rounding);
+  // The lines' closest points a0 + s da and b0 + t db: s = (w x db) . n / |n|^2, t = (w x da) . n / |n|^2.
+  const T n2 = n_norm * n_norm;
+  const T s_times_n2 = w.cross(db).dot(n), t_times_n2 = w.cross(da).dot(n);
+  const T margin = T(INSIDE_MARGIN_FACTOR) * u * longest * longest * longest * local;
+  if (s_times_n2 >= -margin && s_times_n2 <= n2 + margin && t_times_n2 >= -margin && t_times_n2 <= n2 + margin) {
+    const T between_lines = std::abs(w.dot(n)) / n_norm;
+    if (between_lines < out.distance) {
+      out.distance = between_lines;
+      out.param0 = std::clamp<T>(s_times_n2 / n2, 0, 1);
+      out.param1 = std::clamp<T>(t_times_n2 / n2, 0, 1);
+    }
   }
   return out;
 }
