@@ -7,6 +7,7 @@ PACKAGES=(
   cmake g++ make pkg-config
   libeigen3-dev        # dense and sparse linear algebra, fixed-size vectors
   libgmp-dev           # exact rationals: query files with >64-bit numbers, exact CCD references
+  libcgal-dev          # exact predicates of the independent penetration check (drape check)
   libcli11-dev         # command-line parsing and --help
   nlohmann-json3-dev   # JSON scenes and --json output
   libtbb-dev           # parallel narrow phase

@@ -1,10 +1,13 @@
 #pragma once
 /// \file
-/// The independent penetration check: do any two non-adjacent cloth triangles intersect, or a
-/// cloth triangle and an obstacle triangle, or is a cloth vertex inside an analytic obstacle?
-/// It shares no code with the CCD library (its own sweep-and-prune and segment-triangle tests),
-/// so it can judge the collision pipeline's output.
+/// The independent penetration check: do any two non-adjacent cloth triangles meet, or a cloth
+/// triangle and an obstacle (a mesh's triangle, a sphere's ball, a plane's lower half-space)?
+/// Decided exactly (CGAL's filtered exact predicates: floating point where its answer is
+/// certain, exact arithmetic where it is not), so coplanar overlaps and exact touches are found.
+/// It shares no code with the CCD library, so it can judge the collision pipeline's output.
 
+#include <array>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -12,22 +15,37 @@
 
 namespace drape {
 
+/// How two closed shapes meet.
+enum class PenetrationKind : std::uint8_t {
+  Crossing,         ///< one passes through the other (a triangle through a triangle; into a ball or below a plane)
+  CoplanarOverlap,  ///< two triangles in one plane share points
+  Touching,         ///< they meet only where one's boundary lies on the other (distance exactly zero)
+};
+
+const char* penetration_kind_name(PenetrationKind kind);
+
 struct Penetration {
-  int triangle = 0;        ///< cloth triangle (or cloth vertex, for analytic obstacles)
-  int other = 0;           ///< the other cloth triangle, or the obstacle's triangle
-  int obstacle = -1;       ///< -1: cloth against cloth; else the obstacle's index
+  int triangle = 0;   ///< cloth triangle
+  int other = -1;     ///< the other cloth triangle, or the obstacle's triangle (-1: sphere or plane)
+  int obstacle = -1;  ///< -1: cloth against cloth; else the obstacle's index
+  PenetrationKind kind = PenetrationKind::Crossing;
   std::string describe() const;
 };
 
-/// Every intersecting pair at time t for the given cloth positions (up to limit pairs).
+/// Every pair that meets at time t for the given cloth positions (up to limit pairs).
 std::vector<Penetration> find_penetrations(const Model& model, const std::vector<Vec3>& positions, Scalar t,
                                            std::size_t limit = 1000);
 
-/// Whether segment pq crosses triangle abc at an interior point of both (Moller and
-/// Trumbore 1997, strict inequalities: touching does not count).
-bool segment_crosses_triangle(const Vec3& p, const Vec3& q, const Vec3& a, const Vec3& b, const Vec3& c);
+using TriangleCorners = std::array<Vec3, 3>;
 
-/// Whether two triangles intersect (non-coplanar: an edge of one crosses the other).
-bool triangles_intersect(const std::array<Vec3, 3>& s, const std::array<Vec3, 3>& t);
+/// How two triangles (closed, possibly degenerate) meet, exactly; nullopt when they do not.
+std::optional<PenetrationKind> triangles_meet(const TriangleCorners& s, const TriangleCorners& t);
+
+/// How a triangle meets a solid ball, exactly; nullopt when every point is outside.
+std::optional<PenetrationKind> triangle_meets_ball(const TriangleCorners& s, const Vec3& centre, Scalar radius);
+
+/// How a triangle meets the half-space below a plane (normal pointing to the free side),
+/// exactly; nullopt when every corner is on the free side.
+std::optional<PenetrationKind> triangle_meets_half_space(const TriangleCorners& s, const Vec3& point, const Vec3& normal);
 
 }  // namespace drape
