@@ -4,7 +4,20 @@
 // function with __attribute__((target("avx2"))), run only where avx2_enabled(); the helpers
 // inline into it. Every one reproduces a scalar operation bit for bit.
 
+// The x86 kernels are compiled where the compiler targets x86 with GCC's or clang's intrinsics,
+// unless the build asks for the portable kernels alone (CMake: DRAPE_PORTABLE_KERNELS=ON, which
+// tools/test-portable.sh builds and tests); without them every answer comes from the portable
+// code, bit for bit the same.
+#if !defined(DRAPE_PORTABLE_KERNELS_ONLY) && (defined(__x86_64__) || defined(__i386__)) && \
+    (defined(__GNUC__) || defined(__clang__))
+#define DRAPE_X86_KERNELS 1
+#else
+#define DRAPE_X86_KERNELS 0
+#endif
+
+#if DRAPE_X86_KERNELS
 #include <immintrin.h>
+#endif
 
 #include "drape/ccd/coplanarity.h"
 #include "drape/ccd/query.h"
@@ -20,8 +33,8 @@ extern const bool cpu_has_avx2;
 /// same bits and decisions. avx2.cpp.
 extern bool portable_kernels;
 
-/// Whether the AVX2 kernels run (called per query: a load and a test).
-inline bool avx2_enabled() { return cpu_has_avx2 && !portable_kernels; }
+/// Whether the AVX2 kernels run (called per query: a load and a test); never without them.
+inline bool avx2_enabled() { return DRAPE_X86_KERNELS && cpu_has_avx2 && !portable_kernels; }
 
 /// Whether this machine has AVX-512 F and DQ, asked once at start-up (avx2.cpp); and, for
 /// tests only, the AVX2 batch kernel even where the AVX-512 one could run (the same bits).
@@ -31,6 +44,7 @@ extern bool avx2_only;
 /// Whether the batch's cubic kernel runs eight tests at a time (batch.cpp).
 inline bool avx512_enabled() { return avx2_enabled() && cpu_has_avx512 && !avx2_only; }
 
+#if DRAPE_X86_KERNELS
 /// std::max(a, b) and std::min(a, b) lane by lane, NaN and signed zeros included: b where
 /// a < b (b < a), else a. maxpd(x, y) is x > y ? x : y and minpd(x, y) is x < y ? x : y, so
 /// with the operands swapped they are exactly these.
@@ -75,5 +89,7 @@ DRAPE_AVX2 bool filter_culls_avx2(__m256d b, Scalar error) {
   const Scalar ends = _mm_cvtsd_f64(_mm_min_sd(_mm_unpackhi_pd(abs23, abs23), abs01));
   return (!poorly_resolved) & ((lo > 0) | (hi < 0)) & (ends > error);
 }
+
+#endif  // DRAPE_X86_KERNELS
 
 }  // namespace drape::ccd::detail

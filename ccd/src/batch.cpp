@@ -150,6 +150,20 @@ void gather_cubics(const BatchInput& input, const Pair* pairs, std::size_t n, co
   compute_cubics(c, n);
 }
 
+// Which of conservative's first question the kernel asks: none, at zero thickness (the error
+// alone), or with the thickness's share of the cubic (a separate kernel: the share's norms keep
+// more registers alive).
+enum class Apart { No, AtZeroThickness, WithThickness };
+
+// A test the chunk's decisions left (not culled by the filter, not certainly apart for
+// conservative), with its cubic: run a few chunks' worth at a time.
+struct Left {
+  std::size_t index;
+  CoplanarityCubic cubic;
+};
+constexpr int LEFT_MAX = 64;
+
+#if DRAPE_X86_KERNELS
 // The same with AVX2 intrinsics, fused with the gather: four tests at a time, their points
 // loaded straight into registers (x and y as one 128-bit load, then transposed), nothing
 // stored but the results. Every operation is the scalar code's, in its order (no FMA; min and
@@ -223,10 +237,6 @@ DRAPE_AVX2 __m256d certainly_nonzero4(const __m256d (&b)[4], __m256d margin) {
   return _mm256_or_pd(above, below);
 }
 
-// Which of conservative's first question the kernel asks: none, at zero thickness (the error
-// alone), or with the thickness's share of the cubic (a separate kernel: the share's norms keep
-// more registers alive).
-enum class Apart { No, AtZeroThickness, WithThickness };
 
 // Tests i to i + 3 of a chunk, the pairs pair, into c's arrays at i and bits i to i + 3 of
 // culled and (with APART) apart.
@@ -449,13 +459,6 @@ __attribute__((target("avx512f,avx512dq"))) void gather_cubics_avx512(const Batc
 #pragma GCC diagnostic pop
 #endif
 
-// A test the chunk's decisions left (not culled by the filter, not certainly apart for
-// conservative), with its cubic: run a few chunks' worth at a time.
-struct Left {
-  std::size_t index;
-  CoplanarityCubic cubic;
-};
-constexpr int LEFT_MAX = 64;
 
 // Ranges [a_lo, a_hi] and [b_lo, b_hi] farther apart than need, lane by lane.
 DRAPE_AVX2 __m256d apart4(__m256d a_lo, __m256d a_hi, __m256d b_lo, __m256d b_hi, __m256d need) {
@@ -733,6 +736,8 @@ __attribute__((target("avx2"))) StageLanes stage_within_avx2(const BatchInput& i
   return out;
 }
 
+#endif  // DRAPE_X86_KERNELS
+
 // The tests the chunks' decisions left, in order: the full method on the gathered query. For
 // vincent, and conservative at zero thickness, the separation stage is asked here four tests at
 // a time (the whole step's boxes, then the rest of it for the tests those do not separate), and
@@ -741,12 +746,13 @@ template <QueryKind kind, class Pair>
 void run_left(const BatchInput& input, std::span<const Pair> pairs, const Options& options, const Left* left,
               int count, BatchCounters& counters, std::vector<BatchHit>& hits) {
   const bool stage = options.separation_depth > 0 && detail::avx2_enabled();
-  const bool vincent = options.method == Method::Vincent && stage;
-  const bool conservative = options.method == Method::Conservative && options.thickness == 0 && stage;
+  [[maybe_unused]] const bool vincent = options.method == Method::Vincent && stage;
+  [[maybe_unused]] const bool conservative = options.method == Method::Conservative && options.thickness == 0 && stage;
   alignas(32) Scalar need[LEFT_MAX + 3];
   // Bits of left: the tests that go on to the separation stage (as vincent_method and
   // conservative_search decide it), and what the stage decided of them here.
   std::uint64_t within = 0, whole_step_apart = 0, decided = 0, apart = 0;
+#if DRAPE_X86_KERNELS
   if (vincent || conservative) {
     whole_step_apart =
         vincent ? whole_step_apart_avx2<kind, true>(input, pairs.data(), left, count, options.thickness,
@@ -768,6 +774,7 @@ void run_left(const BatchInput& input, std::span<const Pair> pairs, const Option
       }
     }
   }
+#endif  // DRAPE_X86_KERNELS
 #ifndef NDEBUG
   for (int j = 0; j < count; ++j)
     assert(!(vincent || conservative) ||
@@ -811,10 +818,12 @@ BatchCounters run_range(const BatchInput& input, std::span<const Pair> pairs, co
   // as the method counts it. The portable kernel asks it at zero thickness only.
   const bool conservative_first =
       options.method == Method::Conservative && (options.thickness == 0 || detail::avx2_enabled());
-  const Apart apart = !conservative_first ? Apart::No
+  [[maybe_unused]] const Apart apart = !conservative_first ? Apart::No
                      : options.thickness > 0 ? Apart::WithThickness
                                              : Apart::AtZeroThickness;
+#if DRAPE_X86_KERNELS
   const bool eight = detail::avx512_enabled();
+#endif
   ChunkCubics c;
   Left left[LEFT_MAX];
   int left_count = 0;
@@ -823,7 +832,9 @@ BatchCounters run_range(const BatchInput& input, std::span<const Pair> pairs, co
     const Pair* const chunk = pairs.data() + first;
     if (!detail::avx2_enabled()) {
       gather_cubics(input, chunk, n, order, c);
-    } else if (eight) {
+    }
+#if DRAPE_X86_KERNELS
+    else if (eight) {
       switch (apart) {
         case Apart::No: gather_cubics_avx512<kind, Apart::No>(input, chunk, n, options.thickness, c); break;
         case Apart::AtZeroThickness:
@@ -844,6 +855,7 @@ BatchCounters run_range(const BatchInput& input, std::span<const Pair> pairs, co
           break;
       }
     }
+#endif  // DRAPE_X86_KERNELS
     // The tests that end with the chunk's decisions, counted at once; the others kept, in
     // order, and run when a chunk's worth are waiting.
     const std::uint64_t ended = filter ? c.culled : (conservative_first ? c.certainly_apart : 0);

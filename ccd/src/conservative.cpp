@@ -38,6 +38,12 @@ constexpr int COPLANAR_DOUBLE_INTERVALS = 512;
 constexpr int STACK_SIZE = 160;  // depth-first: at most one pending sibling per level
 
 using Extended = long double;
+// The extended search's bounds use Extended's own unit roundoff, and it decides what double
+// cannot only where that is at least 2^11 times finer: x87's 64-bit mantissa (or IEEE quad's
+// 113 bits). Where long double is just double (MSVC, 32-bit ARM, some PowerPC ABIs) the
+// guarantee would silently weaken, so the build stops here instead.
+static_assert(std::numeric_limits<Extended>::digits >= 64,
+              "conservative needs a long double with at least a 64-bit mantissa (x87 extended or IEEE quad)");
 
 template <class T>
 using Coefficients = std::array<T, 4>;

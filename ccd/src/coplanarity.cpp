@@ -17,6 +17,7 @@ Power3 coplanarity_power(QueryKind kind, const Query& query) {
 
 namespace detail {
 
+#if DRAPE_X86_KERNELS
 namespace {
 
 // coplanarity_cubic_in<double> for one query with AVX2: a point's x, y, z in lanes 0-2 of one
@@ -115,5 +116,6 @@ bool edge_edge_culled_avx2(const Query& query, CoplanarityCubic& cubic) {
   return cubic_avx2<QueryKind::EdgeEdge, true>(query, cubic);
 }
 
+#endif  // DRAPE_X86_KERNELS
 }  // namespace detail
 }  // namespace drape::ccd

@@ -149,8 +149,10 @@ bool edge_edge_culled_avx2(const Query& query, CoplanarityCubic& cubic);
 
 /// coplanarity_cubic(kind, query) bit for bit, with AVX2 where the machine has it.
 inline CoplanarityCubic query_cubic(QueryKind kind, const Query& query) {
+#if DRAPE_X86_KERNELS
   if (avx2_enabled())
     return kind == QueryKind::VertexFace ? vertex_face_cubic_avx2(query) : edge_edge_cubic_avx2(query);
+#endif
   return coplanarity_cubic(kind, query);
 }
 
@@ -158,8 +160,10 @@ inline CoplanarityCubic query_cubic(QueryKind kind, const Query& query) {
 /// the cubic (query_cubic's bits). With AVX2 where the machine has it: the one-query entry
 /// points of dnf and vincent start here.
 inline bool query_culled(QueryKind kind, const Query& query, CoplanarityCubic& cubic) {
+#if DRAPE_X86_KERNELS
   if (avx2_enabled())
     return kind == QueryKind::VertexFace ? vertex_face_culled_avx2(query, cubic) : edge_edge_culled_avx2(query, cubic);
+#endif
   cubic = coplanarity_cubic(kind, query);
   return filter_culls(cubic);
 }

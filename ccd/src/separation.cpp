@@ -75,6 +75,7 @@ bool boxes_apart(QueryKind kind, const Query& q, Scalar lo, Scalar hi, Scalar& n
   return false;
 }
 
+#if DRAPE_X86_KERNELS
 // All three axes at once, a point's x, y, z in one register's lanes; one branch at the end
 // (which axis separates is random in a cloth step).
 template <bool NEED_GIVEN>
@@ -110,6 +111,7 @@ __attribute__((target("avx2"))) bool boxes_apart_avx2(QueryKind kind, const Quer
                                      _mm256_cmp_pd(_mm256_sub_pd(a_lo, b_hi), need4, _CMP_GT_OQ));
   return (_mm256_movemask_pd(apart) & 0b111) != 0;
 }
+#endif  // DRAPE_X86_KERNELS
 
 // The axes from the features' shape, after the coordinate axes failed (a few percent of the
 // calls): out of line, so that the common path inlines into roots_apart.
@@ -154,8 +156,10 @@ __attribute__((noinline)) bool shape_axes_apart(QueryKind kind, const Query& q, 
 // need: with NEED_GIVEN the query's gap_and_margin, else the gap (and gap_and_margin on return).
 template <bool NEED_GIVEN>
 inline bool coordinate_axes_apart_inline(QueryKind kind, const Query& q, Scalar lo, Scalar hi, Scalar& need) {
-  return avx2_enabled() ? boxes_apart_avx2<NEED_GIVEN>(kind, q, lo, hi, need)
-                        : boxes_apart<NEED_GIVEN>(kind, q, lo, hi, need);
+#if DRAPE_X86_KERNELS
+  if (avx2_enabled()) return boxes_apart_avx2<NEED_GIVEN>(kind, q, lo, hi, need);
+#endif
+  return boxes_apart<NEED_GIVEN>(kind, q, lo, hi, need);
 }
 
 // apart_over with the query's gap_and_margin already known.

@@ -12,6 +12,7 @@
 using namespace drape;
 using namespace drape::ccd;
 
+#if DRAPE_X86_KERNELS
 namespace {
 
 bool same_bits(double a, double b) { return std::memcmp(&a, &b, sizeof a) == 0; }
@@ -95,3 +96,7 @@ TEST(Avx2, PointLoadsGiveThePoint) {
     }
   }
 }
+
+#else
+TEST(Avx2, NotInThisBuild) { GTEST_SKIP() << "built with the portable kernels alone (DRAPE_PORTABLE_KERNELS)"; }
+#endif  // DRAPE_X86_KERNELS
