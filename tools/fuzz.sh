@@ -1,24 +1,36 @@
 #!/usr/bin/env bash
 # Builds the libFuzzer targets with clang (AddressSanitizer, UBSan, coverage) in
-# ${BUILD_DIR:-build-fuzz} and runs each, seeded with the shipped scenes and query files:
+# ${BUILD_DIR:-build-fuzz} and runs each (the scene parser, the query-file parser, the mesh
+# reader: OBJ and PLY through assimp), seeded with the shipped scenes, query files and meshes:
 # ${FUZZ_RUNS:-100000} inputs from a fixed seed (repeatable, as CI runs it), or for
-# FUZZ_SECONDS seconds when that is set (exploration, a new seed each time). A crash leaves its input in tests/data/fuzz-regressions/
-# (fix it, keep the file: tests replay every file there through the parsers).
+# FUZZ_SECONDS seconds per target when that is set (exploration, a new seed each time).
+#   bash tools/fuzz.sh            # CI: 100,000 inputs a target, a few minutes
+#   bash tools/fuzz.sh --long     # the benchmark-length run: 10 minutes a target (FUZZ_SECONDS=600)
+# A crash leaves its input in tests/data/fuzz-regressions/ (fix it, keep the file: tests replay
+# every file there through the parsers).
 set -euo pipefail
 cd "$(dirname "$0")/.."
+if [ "${1:-}" = "--long" ]; then FUZZ_SECONDS=${FUZZ_SECONDS:-600}; fi
 bash tools/install-deps.sh
 BUILD_DIR=${BUILD_DIR:-build-fuzz}
 if [ -n "${FUZZ_SECONDS:-}" ]; then LIMIT="-max_total_time=$FUZZ_SECONDS"; else LIMIT="-runs=${FUZZ_RUNS:-100000} -seed=20261122"; fi
 FLAGS="-fsanitize=fuzzer-no-link,address,undefined -fno-sanitize-recover=all -O1 -g"
 CC=clang CXX=clang++ cmake -S . -B "$BUILD_DIR" -DCMAKE_BUILD_TYPE=Debug -DDRAPE_BUILD_TESTS=OFF -DDRAPE_BUILD_BENCH=OFF \
   -DDRAPE_BUILD_FUZZERS=ON -DCMAKE_CXX_FLAGS="$FLAGS" -DCMAKE_EXE_LINKER_FLAGS="-fsanitize=address,undefined" >/dev/null
-cmake --build "$BUILD_DIR" -j"${JOBS:-2}" --target fuzz_scene fuzz_query_file
+cmake --build "$BUILD_DIR" -j"${JOBS:-2}" --target fuzz_scene fuzz_query_file fuzz_mesh
 export ASAN_OPTIONS=${ASAN_OPTIONS:-"detect_leaks=0"}
-mkdir -p tests/data/fuzz-regressions "$BUILD_DIR/corpus/scene" "$BUILD_DIR/corpus/query_file"
+mkdir -p tests/data/fuzz-regressions "$BUILD_DIR/corpus/scene" "$BUILD_DIR/corpus/query_file" "$BUILD_DIR/corpus/mesh"
 cp scenes/*.json "$BUILD_DIR/corpus/scene/"
 cp tests/data/ccd-queries/unit-tests/*/*.csv "$BUILD_DIR/corpus/query_file/" 2>/dev/null || true
-for target in scene query_file; do
-  echo "fuzzing the $target parser ($LIMIT)"
+# The mesh fuzzer's first byte picks the reader (even: OBJ, odd: PLY), the rest is the file.
+for mesh in scenes/meshes/*.obj; do
+  { printf '\000'; cat "$mesh"; } > "$BUILD_DIR/corpus/mesh/$(basename "$mesh")"
+done
+{ printf '\001'; printf 'ply\nformat ascii 1.0\nelement vertex 4\nproperty float x\nproperty float y\nproperty float z\n'
+  printf 'element face 2\nproperty list uchar int vertex_indices\nend_header\n0 0 0\n1 0 0\n1 1 0\n0 1 0\n3 0 1 2\n3 0 2 3\n'
+} > "$BUILD_DIR/corpus/mesh/square.ply"
+for target in scene query_file mesh; do
+  echo "fuzzing the $target reader ($LIMIT)"
   # shellcheck disable=SC2086
   "$BUILD_DIR/tests/fuzz/fuzz_$target" $LIMIT -max_len=65536 -rss_limit_mb=4096 -timeout=10 \
     -artifact_prefix=tests/data/fuzz-regressions/"$target"- "$BUILD_DIR/corpus/$target" > "$BUILD_DIR/fuzz_$target.log" 2>&1 \

@@ -16,11 +16,11 @@ std::string assimp_format(const std::string& format) { return format == "obj" ? 
 
 }  // namespace
 
-TriangleMesh load_mesh(const std::filesystem::path& path) {
-  if (!std::filesystem::is_regular_file(path)) throw MeshFileError(path.string() + ": no such mesh file");
-  Assimp::Importer importer;
-  const aiScene* scene = importer.ReadFile(path.string(), aiProcess_Triangulate | aiProcess_SortByPType);
-  if (!scene || !scene->mRootNode) throw MeshFileError(path.string() + ": cannot read the mesh: " + importer.GetErrorString());
+namespace {
+
+// Every triangle of an imported scene into one mesh, welded (load_mesh); name in messages.
+TriangleMesh mesh_of(const Assimp::Importer& importer, const aiScene* scene, const std::string& name) {
+  if (!scene || !scene->mRootNode) throw MeshFileError(name + ": cannot read the mesh: " + importer.GetErrorString());
   TriangleMesh mesh;
   std::map<std::array<Scalar, 3>, int> welded;
   for (unsigned m = 0; m < scene->mNumMeshes; ++m) {
@@ -46,8 +46,24 @@ TriangleMesh load_mesh(const std::filesystem::path& path) {
       mesh.triangles.push_back({index[face.mIndices[0]], index[face.mIndices[1]], index[face.mIndices[2]]});
     }
   }
-  if (mesh.triangles.empty()) throw MeshFileError(path.string() + ": the file holds no triangles");
+  if (mesh.triangles.empty()) throw MeshFileError(name + ": the file holds no triangles");
   return mesh;
+}
+
+}  // namespace
+
+TriangleMesh load_mesh(const std::filesystem::path& path) {
+  if (!std::filesystem::is_regular_file(path)) throw MeshFileError(path.string() + ": no such mesh file");
+  Assimp::Importer importer;
+  const aiScene* scene = importer.ReadFile(path.string(), aiProcess_Triangulate | aiProcess_SortByPType);
+  return mesh_of(importer, scene, path.string());
+}
+
+TriangleMesh parse_mesh(const std::string& bytes, const std::string& format, const std::string& name) {
+  Assimp::Importer importer;
+  const aiScene* scene =
+      importer.ReadFileFromMemory(bytes.data(), bytes.size(), aiProcess_Triangulate | aiProcess_SortByPType, format.c_str());
+  return mesh_of(importer, scene, name);
 }
 
 std::vector<Vec3> load_frame_positions(const std::filesystem::path& path, const TriangleMesh& topology) {

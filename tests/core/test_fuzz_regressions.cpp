@@ -7,6 +7,8 @@
 #include <sstream>
 
 #include "drape/ccd/query_file.h"
+#include "drape/core/mesh.h"
+#include "drape/core/mesh_io.h"
 #include "drape/core/model.h"
 
 namespace fs = std::filesystem;
@@ -25,6 +27,17 @@ TEST(FuzzRegressions, EveryKeptInputEndsInAResultOrAClearError) {
         EXPECT_NE(std::string(e.what()).find(entry.path().string()), std::string::npos) << e.what();
       }
       ++replayed;
+    } else if (name.rfind("mesh-", 0) == 0) {
+      // As the mesh fuzzer reads it: the first byte picks OBJ (even) or PLY (odd).
+      const std::string bytes = buffer.str();
+      if (bytes.empty()) continue;
+      const std::string format = (static_cast<unsigned char>(bytes[0]) & 1) ? "ply" : "obj";
+      try {
+        (void)drape::mesh_problem(drape::parse_mesh(bytes.substr(1), format, entry.path().string()));
+      } catch (const drape::MeshFileError& e) {
+        EXPECT_NE(std::string(e.what()).find(entry.path().string()), std::string::npos) << e.what();
+      }
+      ++replayed;
     } else if (name.rfind("query_file-", 0) == 0) {
       try {
         drape::ccd::parse_query_text(buffer.str(), entry.path(), drape::ccd::QueryKind::EdgeEdge);
@@ -34,5 +47,5 @@ TEST(FuzzRegressions, EveryKeptInputEndsInAResultOrAClearError) {
       ++replayed;
     }
   }
-  EXPECT_GE(replayed, 7u);
+  EXPECT_GE(replayed, 9u);
 }

@@ -28,6 +28,10 @@ TriangleMesh load_mesh(const std::filesystem::path& path);
 /// happen to coincide stay apart). Throws MeshFileError when the file's triangle count differs
 /// from the mesh's ("<file>: expected N triangles, found M") or a coordinate is not finite
 /// ("<file>: vertex N has a non-finite coordinate").
+/// load_mesh on a file's bytes in memory, format the extension assimp should read it as ("obj",
+/// "ply", ...); name stands for the file in messages. The mesh fuzzer's entry point.
+TriangleMesh parse_mesh(const std::string& bytes, const std::string& format, const std::string& name);
+
 std::vector<Vec3> load_frame_positions(const std::filesystem::path& path, const TriangleMesh& topology);
 
 /// Writes the mesh atomically (a temporary file renamed into place), so a reader never sees a
