@@ -1,12 +1,17 @@
 #include "drape/core/mesh_io.h"
 
+#include "ply_check.h"
+
 #include <assimp/Exporter.hpp>
 #include <assimp/Importer.hpp>
 #include <assimp/postprocess.h>
 #include <assimp/scene.h>
 
 #include <cmath>
+#include <fstream>
+#include <iterator>
 #include <map>
+#include <string_view>
 
 namespace drape {
 namespace {
@@ -17,6 +22,20 @@ std::string assimp_format(const std::string& format) { return format == "obj" ? 
 }  // namespace
 
 namespace {
+
+// importer.ReadFile after check_ply on a PLY file's bytes (assimp 5.2 hangs or aborts on some
+// malformed PLY files: ply_check.h).
+const aiScene* read_file(Assimp::Importer& importer, const std::filesystem::path& path, unsigned flags) {
+  std::ifstream in(path, std::ios::binary);
+  char magic[3] = {};
+  in.read(magic, 3);
+  if (in.gcount() == 3 && std::string_view(magic, 3) == "ply") {
+    in.seekg(0);
+    const std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    check_ply(bytes, path.string());
+  }
+  return importer.ReadFile(path.string(), flags);
+}
 
 // Every triangle of an imported scene into one mesh, welded (load_mesh); name in messages.
 TriangleMesh mesh_of(const Assimp::Importer& importer, const aiScene* scene, const std::string& name) {
@@ -55,11 +74,12 @@ TriangleMesh mesh_of(const Assimp::Importer& importer, const aiScene* scene, con
 TriangleMesh load_mesh(const std::filesystem::path& path) {
   if (!std::filesystem::is_regular_file(path)) throw MeshFileError(path.string() + ": no such mesh file");
   Assimp::Importer importer;
-  const aiScene* scene = importer.ReadFile(path.string(), aiProcess_Triangulate | aiProcess_SortByPType);
+  const aiScene* scene = read_file(importer, path, aiProcess_Triangulate | aiProcess_SortByPType);
   return mesh_of(importer, scene, path.string());
 }
 
 TriangleMesh parse_mesh(const std::string& bytes, const std::string& format, const std::string& name) {
+  if (std::string_view(bytes).substr(0, 3) == "ply") check_ply(bytes, name);
   Assimp::Importer importer;
   const aiScene* scene =
       importer.ReadFileFromMemory(bytes.data(), bytes.size(), aiProcess_Triangulate | aiProcess_SortByPType, format.c_str());
@@ -68,7 +88,7 @@ TriangleMesh parse_mesh(const std::string& bytes, const std::string& format, con
 
 std::vector<Vec3> load_frame_positions(const std::filesystem::path& path, const TriangleMesh& topology) {
   Assimp::Importer importer;
-  const aiScene* scene = importer.ReadFile(path.string(), aiProcess_Triangulate);
+  const aiScene* scene = read_file(importer, path, aiProcess_Triangulate);
   if (!scene || !scene->mRootNode) throw MeshFileError(path.string() + ": cannot read the mesh: " + importer.GetErrorString());
   std::vector<Vec3> positions(topology.vertices.size(), Vec3::Zero());
   std::size_t face = 0;  // every triangle of the file is counted, those beyond the topology too
