@@ -70,7 +70,10 @@ std::optional<Model> load_model(const std::string& path, const char* command, co
   try {
     Scene scene = load_scene(path);
     if (!method.empty()) scene.collisions.method = *ccd::parse_method(method);
-    return build_model(scene);
+    Model model = build_model(scene);
+    if (const std::string note = thickness_note(model); !note.empty())
+      std::cerr << "drape " << command << ": " << path << ": warning: " << note << "\n";
+    return model;
   } catch (const SceneError& e) {
     std::cerr << "drape " << command << ": " << e.what() << "\n";
   }

@@ -1,7 +1,11 @@
 #!/usr/bin/env python3
 """Writes the obstacle meshes the shipped scenes use (scenes/meshes/*.obj). Run once; the
 files are committed. icosphere.obj: a unit sphere, an icosahedron subdivided 3 times (1,280
-triangles). box.obj: a unit cube centred on the origin, each face a 4x4 grid (192 triangles)."""
+triangles). box.obj: a unit cube centred on the origin, each face a 4x4 grid (192 triangles).
+disc_30cm.obj: the Cusick drape test's specimen, a 30 cm disc in z = 0 of 25 concentric rings
+(ring k holds 6k vertices, 6 mm apart: 1,951 vertices, 3,750 triangles), the mesh a user brings.
+cusick_support.obj: an 18 cm disc support, a closed cylinder of radius 0.09 m and height 0.3 m
+standing on z = 0 (64 segments around)."""
 import math, os
 
 def write(path, vertices, faces, comment):
@@ -62,7 +66,65 @@ def box(n):
                         faces += [(a, c, b), (a, d, c)]
     return vertices, faces
 
+def disc(radius, rings):
+    vertices, faces = [(0.0, 0.0, 0.0)], []
+    first = [0]  # index of each ring's first vertex
+    for k in range(1, rings + 1):
+        first.append(len(vertices))
+        r = radius * k / rings
+        for i in range(6 * k):
+            a = 2 * math.pi * i / (6 * k)
+            vertices.append((r * math.cos(a), r * math.sin(a), 0.0))
+    def at(k, i):  # vertex i (mod 6k) of ring k
+        return 0 if k == 0 else first[k] + i % (6 * k)
+    for j in range(6):  # the centre's fan
+        faces.append((0, at(1, j), at(1, j + 1)))
+    for k in range(2, rings + 1):
+        # Ring k-1 (6(k-1) vertices) to ring k (6k): walk both rings by angle, counter-clockwise.
+        i = j = 0
+        n_in, n_out = 6 * (k - 1), 6 * k
+        while i < n_in or j < n_out:
+            # advance on the ring whose next vertex comes first in angle
+            if j < n_out and (i >= n_in or (j + 1) / n_out <= (i + 1) / n_in):
+                faces.append((at(k - 1, i), at(k, j), at(k, j + 1)))
+                j += 1
+            else:
+                faces.append((at(k - 1, i), at(k, j), at(k - 1, i + 1)))
+                i += 1
+    return vertices, faces
+
+def cylinder(radius, height, segments, cap_rings):
+    vertices, faces = [], []
+    def ring(z, r):
+        start = len(vertices)
+        for i in range(segments):
+            a = 2 * math.pi * i / segments
+            vertices.append((r * math.cos(a), r * math.sin(a), z))
+        return start
+    bottom, top = ring(0.0, radius), ring(height, radius)
+    for i in range(segments):
+        j = (i + 1) % segments
+        faces += [(bottom + i, bottom + j, top + j), (bottom + i, top + j, top + i)]  # outward
+    for z, up in ((height, True), (0.0, False)):
+        outer = top if up else bottom
+        for k in range(cap_rings - 1, 0, -1):
+            inner = ring(z, radius * k / cap_rings)
+            for i in range(segments):
+                j = (i + 1) % segments
+                quad = [(outer + i, outer + j, inner + j), (outer + i, inner + j, inner + i)]
+                faces += quad if up else [(a, c, b) for a, b, c in quad]
+            outer = inner
+        centre = len(vertices)
+        vertices.append((0.0, 0.0, z))
+        for i in range(segments):
+            j = (i + 1) % segments
+            faces.append((outer + i, outer + j, centre) if up else (outer + j, outer + i, centre))
+    return vertices, faces
+
 here = os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "scenes", "meshes")
 os.makedirs(here, exist_ok=True)
 write(os.path.join(here, "icosphere.obj"), *icosphere(3), "unit icosphere, 3 subdivisions (tools/make_meshes.py)")
 write(os.path.join(here, "box.obj"), *box(4), "unit cube, 4x4 quads a face (tools/make_meshes.py)")
+write(os.path.join(here, "disc_30cm.obj"), *disc(0.15, 25), "30 cm disc, 25 rings 6 mm apart (tools/make_meshes.py)")
+write(os.path.join(here, "cusick_support.obj"), *cylinder(0.09, 0.3, 64, 4),
+      "18 cm support: cylinder r 0.09 m, h 0.3 m on z = 0 (tools/make_meshes.py)")

@@ -1,6 +1,8 @@
 #include "drape/core/collision.h"
 
 #include <chrono>
+#include <cstdio>
+#include <limits>
 #include <numeric>
 
 #include "drape/ccd/broad_phase.h"
@@ -16,11 +18,28 @@ void CollisionCounters::add(const CollisionCounters& o) {
   ee_tests += o.ee_tests;
   ccd_hits += o.ccd_hits;
   proximity_impulses += o.proximity_impulses;
+  rest_clamped_pairs += o.rest_clamped_pairs;
   impulse_iterations += o.impulse_iterations;
   impact_zones += o.impact_zones;
   fail_safes += o.fail_safes;
   ccd_ms += o.ccd_ms;
   response_ms += o.response_ms;
+}
+
+std::string thickness_note(const Model& model, const CollisionSettings& settings) {
+  if (!model.scene.collisions.self) return {};
+  Scalar shortest = std::numeric_limits<Scalar>::infinity();
+  for (const Spring& s : model.springs)
+    if (s.kind == SpringKind::Stretch) shortest = std::min(shortest, s.rest_length);
+  const Scalar thickness = model.scene.collisions.thickness;
+  if (!(settings.rest_fraction * shortest < thickness)) return {};
+  char text[512];
+  std::snprintf(text, sizeof text,
+                "the thickness (%.3g m) is large against the cloth's shortest edge (%.3g m): features of one cloth "
+                "closer than %.3g m in the rest shape keep %.0f %% of their rest distance apart instead of the "
+                "thickness (counted per frame as rest_clamped_pairs in stats.csv; docs/collisions.md)",
+                thickness, shortest, thickness / settings.rest_fraction, 100 * settings.rest_fraction);
+  return text;
 }
 
 bool CollisionPipeline::needed(const Model& model) {
@@ -70,6 +89,7 @@ struct CollisionPipeline::Impl {
   std::vector<MeshObstacle> obstacles;
   ccd::BoxTree cloth_tree;
   std::vector<Scalar> inverse_mass;  // combined array; 0 for kinematic vertices
+  std::vector<int> cloth_of_vertex;  // cloth vertices only: the index of their cloth
   std::vector<Vec3> start, end;      // combined positions at t and t + h
   std::vector<ccd::Aabb> boxes;
   std::vector<ccd::FeatureVolume> features;  // per-vertex swept volumes for feature_pairs (empty: no feature culling)
@@ -90,6 +110,9 @@ struct CollisionPipeline::Impl {
       }
     }
     inverse_mass.assign(offset, 0.0);
+    cloth_of_vertex.assign(std::size_t(cloth_vertices), 0);
+    for (std::size_t c = 0; c < m.cloths.size(); ++c)
+      for (int v = 0; v < m.cloths[c].vertex_count; ++v) cloth_of_vertex[std::size_t(m.cloths[c].first_vertex + v)] = int(c);
     for (int v = 0; v < cloth_vertices; ++v)
       if (m.pin_of_vertex[v] < 0) inverse_mass[v] = 1.0 / m.masses[v];
     start.resize(offset);
@@ -135,16 +158,20 @@ struct CollisionPipeline::Impl {
     return v < cloth_vertices ? motion[v] : Vec3((end[v] - start[v]) / h);
   }
 
+  // The contact's relative velocity, sum_k weight_k v_k.
+  Vec3 relative_velocity(const Contact& c, Scalar h, const std::vector<Vec3>& motion) const {
+    Vec3 relative = Vec3::Zero();
+    for (int k = 0; k < 4; ++k) relative += c.weight[k] * velocity(c.vertex[k], h, motion);
+    return relative;
+  }
+
   // Applies the impulse that brings the contact's normal relative velocity up to target, and
   // Coulomb friction: the relative tangential velocity shrinks by friction times the normal
   // velocity change, never reversing (Bridson, Fedkiw and Anderson 2002, section 7.2).
   bool impulse(const Contact& c, Scalar target, Scalar h, std::vector<Vec3>& motion) const {
-    Vec3 relative = Vec3::Zero();
+    const Vec3 relative = relative_velocity(c, h, motion);
     Scalar denominator = 0;
-    for (int k = 0; k < 4; ++k) {
-      relative += c.weight[k] * velocity(c.vertex[k], h, motion);
-      denominator += c.weight[k] * c.weight[k] * inverse_mass[c.vertex[k]];
-    }
+    for (int k = 0; k < 4; ++k) denominator += c.weight[k] * c.weight[k] * inverse_mass[c.vertex[k]];
     const Scalar normal_speed = relative.dot(c.normal);
     if (normal_speed >= target || !(denominator > 0)) return false;
     const Vec3 tangential = relative - normal_speed * c.normal;
@@ -241,28 +268,53 @@ struct CollisionPipeline::Impl {
     }
   }
 
-  // Proximity repulsion: features closer than the thickness at the start move apart.
+  // The gap kept between two features: the thickness, but for features of one cloth that are
+  // closer than it in the rest shape (neighbours on a mesh finer than the thickness), which
+  // keep rest_fraction of their rest distance (docs/collisions.md, "Thickness and the rest
+  // shape"). Pairs with an obstacle vertex, or across two cloths, keep the thickness.
+  Scalar kept_gap(bool vertex_face, const std::array<int, 4>& v, CollisionCounters& counters) const {
+    const Scalar thickness = model.scene.collisions.thickness;
+    for (int k = 0; k < 4; ++k)
+      if (v[k] >= cloth_vertices || cloth_of_vertex[std::size_t(v[k])] != cloth_of_vertex[std::size_t(v[0])]) return thickness;
+    const auto& r = model.initial_positions;
+    const auto p = [&](int k) -> const Vec3& { return r[std::size_t(v[k])]; };
+    const Scalar rest_squared = vertex_face ? ccd::closest_point_triangle<Scalar>(p(0), p(1), p(2), p(3)).distance_squared
+                                            : ccd::closest_segment_segment<Scalar>(p(0), p(1), p(2), p(3)).distance_squared;
+    const Scalar f = settings.rest_fraction;
+    if (f * f * rest_squared >= thickness * thickness) return thickness;
+    ++counters.rest_clamped_pairs;
+    return f * std::sqrt(rest_squared);
+  }
+
+  // Proximity repulsion (Bridson, Fedkiw and Anderson 2002, section 7.2: its inelastic impulse,
+  // without the spring push that follows): features closer than their kept gap at the start
+  // that approach each other get the impulse that stops the approach, and no more. Never a
+  // separating velocity: the normal kinetic energy only falls, and a resting or freely falling
+  // cloth gets none.
   void repel(const ccd::Candidates& c, Scalar h, std::vector<Vec3>& motion, CollisionCounters& counters) {
     const Scalar thickness = model.scene.collisions.thickness;
-    const auto push = [&](Contact contact, const Vec3& offset) {
+    const auto push = [&](bool vertex_face, Contact contact, const Vec3& offset) {
       const Scalar distance = offset.norm();
       if (!(distance < thickness) || !(distance > 0)) return;
+      const Scalar gap = kept_gap(vertex_face, contact.vertex, counters);
+      if (!(distance < gap)) return;
       contact.normal = offset / distance;
-      if (impulse(contact, settings.repulsion_fraction * (thickness - distance) / h, h, motion)) ++counters.proximity_impulses;
+      if (!(relative_velocity(contact, h, motion).dot(contact.normal) < 0)) return;  // not approaching
+      if (impulse(contact, 0, h, motion)) ++counters.proximity_impulses;
     };
     for (const auto& p : c.vertex_face) {
       const auto closest = ccd::closest_point_triangle<Scalar>(start[p.vertex], start[p.face[0]], start[p.face[1]], start[p.face[2]]);
       Contact contact;
       contact.vertex = {p.vertex, p.face[0], p.face[1], p.face[2]};
       contact.weight = {1, -(1 - closest.weight_b - closest.weight_c), -closest.weight_b, -closest.weight_c};
-      push(contact, start[p.vertex] - closest.point);
+      push(true, contact, start[p.vertex] - closest.point);
     }
     for (const auto& p : c.edge_edge) {
       const auto closest = ccd::closest_segment_segment<Scalar>(start[p.edge_a[0]], start[p.edge_a[1]], start[p.edge_b[0]], start[p.edge_b[1]]);
       Contact contact;
       contact.vertex = {p.edge_a[0], p.edge_a[1], p.edge_b[0], p.edge_b[1]};
       contact.weight = {1 - closest.s, closest.s, -(1 - closest.u), -closest.u};
-      push(contact, closest.point_a - closest.point_b);
+      push(false, contact, closest.point_a - closest.point_b);
     }
   }
 

@@ -88,6 +88,19 @@ TEST(RunCommand, ValidateAcceptsAndRejects) {
   EXPECT_EQ(run_drape("run " + SOURCE + "/scenes/flag.json --frames 0").status, 2);
 }
 
+TEST(RunCommand, ValidateWarnsWhenTheThicknessIsLargeAgainstTheEdges) {
+  // The Cusick disc: edges of about 6 mm against the default 5 mm thickness, self-collision on.
+  const Outcome fine = run_drape("validate " + SOURCE + "/bench/scenes/cusick_drape.json");
+  EXPECT_EQ(fine.status, 0) << fine.output;
+  EXPECT_NE(fine.output.find("warning: the thickness (0.005 m) is large against the cloth's shortest edge"),
+            std::string::npos)
+      << fine.output;
+  EXPECT_NE(fine.output.find("rest_clamped_pairs"), std::string::npos) << fine.output;
+  // Self-collision off, or edges long enough: nothing to say.
+  const Outcome coarse = run_drape("validate " + SOURCE + "/scenes/flag.json");
+  EXPECT_EQ(coarse.output.find("warning"), std::string::npos) << coarse.output;
+}
+
 TEST(RunCommand, AStoppedRunSaysWhyAndKeepsItsFrames) {
   // The cloth falls out of the scene bounds during its fourth frame or so.
   const fs::path scene = write_scene("falls", R"({"comment": "falls out of its bounds",

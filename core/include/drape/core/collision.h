@@ -7,12 +7,14 @@
 /// velocities until the straight-line motion of the step is free of collisions, cloth against
 /// itself and against mesh obstacles:
 ///   broad phase (btDbvt over swept triangle boxes) -> elementary tests (the scene's CCD
-///   method, in parallel) -> proximity repulsion within the thickness -> CCD impulses,
+///   method, in parallel) -> proximity repulsion of approaching features within the thickness
+///   (or within their rest distance's share, for neighbours of a fine mesh) -> CCD impulses,
 ///   iterated -> rigid impact zones -> the fail-safe (colliding vertices keep their start
 ///   positions, then all cloth vertices do).
 
 #include <functional>
 #include <memory>
+#include <string>
 
 #include "drape/ccd/batch.h"
 #include "drape/core/model.h"
@@ -26,9 +28,9 @@ struct CollisionSettings {
   /// Separation speed an impulse leaves between colliding features, as a fraction of
   /// thickness / h: enough that the next round does not find the same contact again.
   Scalar separation_fraction = 0.1;
-  /// Proximity repulsion: features closer than the thickness at the start get a separating
-  /// normal velocity of this fraction of (thickness - distance) / h.
-  Scalar repulsion_fraction = 0.25;
+  /// Features of one cloth closer than the thickness in the rest shape keep this fraction of
+  /// their rest distance as their gap instead of the thickness (docs/collisions.md).
+  Scalar rest_fraction = 0.5;
   int threads = 1;  ///< narrow-phase threads (results do not depend on it)
 };
 
@@ -39,6 +41,7 @@ struct CollisionCounters {
   long vf_tests = 0, ee_tests = 0;
   long ccd_hits = 0;            ///< collisions found, summed over rounds
   long proximity_impulses = 0;
+  long rest_clamped_pairs = 0;  ///< proximity pairs whose gap the rest shape made smaller than the thickness
   long impulse_iterations = 0;  ///< CCD-impulse rounds that found collisions
   long impact_zones = 0;        ///< zones formed (counted each round)
   long fail_safes = 0;          ///< steps that needed the fail-safe
@@ -46,6 +49,12 @@ struct CollisionCounters {
   double response_ms = 0;       ///< everything else
   void add(const CollisionCounters& other);
 };
+
+/// What the user should know when the thickness is large against a cloth's edges: with
+/// self-collision on and a stretch edge shorter than thickness / rest_fraction, neighbours of
+/// the rest shape keep rest_fraction of their rest distance instead of the thickness (counted
+/// in the statistics as rest_clamped_pairs). Empty when nothing to say.
+std::string thickness_note(const Model& model, const CollisionSettings& settings = {});
 
 class CollisionPipeline {
  public:
