@@ -109,3 +109,24 @@ TEST(Penetration, FindsCoplanarClothOverlapAndATriangleInsideASphere) {
   EXPECT_EQ(found[0].obstacle, 0);
   EXPECT_EQ(found[0].kind, PenetrationKind::Crossing);
 }
+
+TEST(Penetration, FindsTouchingClothOnHandMadeFrames) {
+  // Two quads of one cloth; the second set by hand so that one of its edges lies exactly on the
+  // first quad's plane, inside it, the rest of it above: touching, not crossing.
+  Model model = build_model(parse_scene(R"({"cloths": [{"grid": {"resolution": [1, 1]}}, {"grid": {"resolution": [1, 1]}}],
+    "obstacles": [{"plane": {"point": [0, 0, -1], "normal": [0, 0, 1]}}]})", "p.json"));
+  std::vector<Vec3> x = model.initial_positions;
+  x[4] = Vec3(-0.25, -0.25, 0), x[5] = Vec3(0.25, -0.25, 0), x[6] = Vec3(-0.25, 0.25, 1), x[7] = Vec3(0.25, 0.25, 1);
+  auto found = find_penetrations(model, x, 0);
+  ASSERT_FALSE(found.empty());
+  for (const Penetration& p : found) EXPECT_EQ(p.kind, PenetrationKind::Touching) << p.describe();
+  // Lifted by one unit in the last place: nothing meets.
+  x[4].z() = x[5].z() = above(0);
+  EXPECT_TRUE(find_penetrations(model, x, 0).empty());
+  // A corner of the first quad exactly on the ground plane z = -1: touching the obstacle.
+  x[0].z() = -1;
+  found = find_penetrations(model, x, 0);
+  ASSERT_FALSE(found.empty());
+  EXPECT_EQ(found.back().obstacle, 0);
+  EXPECT_EQ(found.back().kind, PenetrationKind::Touching);
+}
