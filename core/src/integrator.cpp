@@ -16,6 +16,11 @@ State initial_state(const Model& model) {
 // The system matrix over the free vertices, with the place of every 3x3 block in its
 // compressed storage: a block (a, b) occupies rows 3a..3a+2 of columns 3b..3b+2, and the three
 // rows of one column are contiguous, so the offset of row 3a in each column is enough.
+// The penalty that holds a contact vertex to the velocity the collision response gave it while
+// the response is spread through the implicit system: its diagonal block's largest entry times
+// this, added to the block, so it follows its target to about 1 / RESPONSE_HOLD of its change.
+constexpr Scalar RESPONSE_HOLD = 1e8;
+
 struct Integrator::Workspace {
   std::vector<int> free_index;               // vertex -> free vertex index, or -1 if pinned
   int free_count = 0;
@@ -211,6 +216,15 @@ StepReport Integrator::step(State& state) {
     // The collision impulses are velocity changes: the state's velocities get them too.
     const std::vector<Vec3> proposed = motion;
     report.collisions = collisions_->resolve(state.positions, state.time, h, motion);
+    // The response changes only the contact vertices; their neighbours keep the velocities the
+    // solve gave them for a different motion of those vertices, and against stiff springs that
+    // mismatch becomes strain (on a mesh obstacle's rim, energy grew without bound). So the
+    // change is spread through the implicit system: solved again with the contact vertices held
+    // (a penalty) to their new velocities, then the response runs once more on the result.
+    if (spread_response(proposed, motion, report)) {
+      if (!report.ok) return report;
+      report.collisions.add(collisions_->resolve(state.positions, state.time, h, motion));
+    }
     for (int v = 0; v < n; ++v) state.velocities[v] += motion[v] - proposed[v];
   }
   for (int v = 0; v < n; ++v) state.positions[v] += h * motion[v];
@@ -231,6 +245,40 @@ StepReport Integrator::step(State& state) {
     }
   }
   return report;
+}
+
+bool Integrator::spread_response(const std::vector<Vec3>& proposed, std::vector<Vec3>& motion, StepReport& report) {
+  const Model& m = model_;
+  Workspace& w = *work_;
+  const int n = int(m.vertex_count());
+  bool changed = false;
+  w.rhs.setZero();
+  for (int v = 0; v < n; ++v) {
+    const int a = w.free_index[v];
+    if (a < 0 || motion[v] == proposed[v]) continue;
+    changed = true;
+    Scalar diagonal = 0;  // the block's own scale: the mass, or h^2 k where springs are stiffer
+    for (int c = 0; c < 3; ++c) diagonal = std::max(diagonal, w.matrix.valuePtr()[w.diagonal[a][c] + c]);
+    const Scalar hold = RESPONSE_HOLD * diagonal;
+    w.add_block(w.diagonal[a], hold * Mat3::Identity());
+    w.rhs.segment<3>(3 * a) = hold * (motion[v] - proposed[v]);
+  }
+  if (!changed) return false;
+  const auto begin = std::chrono::steady_clock::now();
+  const SolveReport solved = solver_->solve(w.matrix, w.rhs, w.solution);
+  report.solve_ms += std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - begin).count();
+  report.solver_iterations += solved.iterations;
+  report.solver_converged = report.solver_converged && solved.converged;
+  if (!solved.ok) {
+    report.ok = false;
+    report.failure = "the linear solver failed spreading the collision response: " + solved.error;
+    return true;
+  }
+  for (int v = 0; v < n; ++v) {
+    const int a = w.free_index[v];
+    if (a >= 0) motion[v] = proposed[v] + Vec3(w.solution.segment<3>(3 * a));
+  }
+  return true;
 }
 
 Scalar kinetic_energy(const Model& model, const State& state) {

@@ -51,6 +51,10 @@ class Integrator {
 
  private:
   struct Workspace;
+  // The collision response (motion - proposed, on the contact vertices) spread through this
+  // step's system: the system solved again with those vertices held to their new velocities;
+  // motion receives the result. False when the response changed nothing.
+  bool spread_response(const std::vector<Vec3>& proposed, std::vector<Vec3>& motion, StepReport& report);
   const Model& model_;
   std::unique_ptr<LinearSolver> solver_;
   std::unique_ptr<CollisionPipeline> collisions_;  // only when the scene needs it
