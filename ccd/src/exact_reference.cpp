@@ -268,34 +268,26 @@ Conditions conditions_of(QueryKind kind, const Query& q) {
   for (int i = 0; i < 4; ++i) x[std::size_t(i)] = moving_point(q.start[std::size_t(i)], q.end[std::size_t(i)]);
   Conditions c;
   c.kind = kind;
-  if (kind == QueryKind::VertexFace) {
-    const Point &p = x[0], &a = x[1], &b = x[2], &cc = x[3];
-    c.coplanarity = triple_product(difference(b, a), difference(cc, a), difference(p, a));
-    c.per_projection = 3;
-    for (const auto& ij : PROJECTIONS) {
-      c.orientations.push_back(orientation(a, b, p, ij[0], ij[1]));
-      c.orientations.push_back(orientation(b, cc, p, ij[0], ij[1]));
-      c.orientations.push_back(orientation(cc, a, p, ij[0], ij[1]));
+  // Points of the query, and which of them each 2D orientation takes (u, v, w): vertex-face,
+  // the vertex (0) against each edge of the face (1, 2, 3); edge-edge, each edge's ends
+  // against the other edge. The coordinate differences: one feature's points minus the other's.
+  const bool vertex_face = kind == QueryKind::VertexFace;
+  static constexpr int VF_ORIENTATIONS[][3] = {{1, 2, 0}, {2, 3, 0}, {3, 1, 0}};
+  static constexpr int EE_ORIENTATIONS[][3] = {{0, 1, 2}, {0, 1, 3}, {2, 3, 0}, {2, 3, 1}};
+  const int split = vertex_face ? 1 : 2;  // points [0, split) are the first feature's
+  c.coplanarity = vertex_face ? triple_product(difference(x[2], x[1]), difference(x[3], x[1]), difference(x[0], x[1]))
+                              : triple_product(difference(x[1], x[0]), difference(x[3], x[2]), difference(x[2], x[0]));
+  c.per_projection = vertex_face ? 3 : 4;
+  for (const auto& ij : PROJECTIONS)
+    for (int o = 0; o < c.per_projection; ++o) {
+      const int* uvw = vertex_face ? VF_ORIENTATIONS[o] : EE_ORIENTATIONS[o];
+      c.orientations.push_back(orientation(x[std::size_t(uvw[0])], x[std::size_t(uvw[1])], x[std::size_t(uvw[2])], ij[0], ij[1]));
     }
-    c.per_coordinate = 3;
-    for (int k = 0; k < 3; ++k)
-      for (int i = 1; i < 4; ++i) c.differences.push_back(sub(x[std::size_t(i)][std::size_t(k)], p[std::size_t(k)]));
-  } else {
-    const Point &a0 = x[0], &a1 = x[1], &b0 = x[2], &b1 = x[3];
-    c.coplanarity = triple_product(difference(a1, a0), difference(b1, b0), difference(b0, a0));
-    c.per_projection = 4;
-    for (const auto& ij : PROJECTIONS) {
-      c.orientations.push_back(orientation(a0, a1, b0, ij[0], ij[1]));
-      c.orientations.push_back(orientation(a0, a1, b1, ij[0], ij[1]));
-      c.orientations.push_back(orientation(b0, b1, a0, ij[0], ij[1]));
-      c.orientations.push_back(orientation(b0, b1, a1, ij[0], ij[1]));
-    }
-    c.per_coordinate = 4;
-    for (int k = 0; k < 3; ++k)
-      for (int i = 0; i < 2; ++i)
-        for (int j = 2; j < 4; ++j)
-          c.differences.push_back(sub(x[std::size_t(i)][std::size_t(k)], x[std::size_t(j)][std::size_t(k)]));
-  }
+  c.per_coordinate = split * (4 - split);
+  for (int k = 0; k < 3; ++k)
+    for (int i = 0; i < split; ++i)
+      for (int j = split; j < 4; ++j)
+        c.differences.push_back(sub(x[std::size_t(j)][std::size_t(k)], x[std::size_t(i)][std::size_t(k)]));
   return c;
 }
 

@@ -193,16 +193,7 @@ StepReport Integrator::step(State& state) {
   }
 
   // The implicit solve.
-  const auto begin = std::chrono::steady_clock::now();
-  const SolveReport solved = solver_->solve(w.matrix, w.rhs, w.solution);
-  report.solve_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - begin).count();
-  report.solver_iterations = solved.iterations;
-  report.solver_converged = solved.converged;
-  if (!solved.ok) {
-    report.ok = false;
-    report.failure = "the linear solver failed: " + solved.error;
-    return report;
-  }
+  if (!solve(report, "the linear solver failed: ")) return report;
 
   // Velocities; the motion of the step starts as the same velocities.
   for (int v = 0; v < n; ++v) {
@@ -247,6 +238,20 @@ StepReport Integrator::step(State& state) {
   return report;
 }
 
+bool Integrator::solve(StepReport& report, const std::string& failure) {
+  Workspace& w = *work_;
+  const auto begin = std::chrono::steady_clock::now();
+  const SolveReport solved = solver_->solve(w.matrix, w.rhs, w.solution);
+  report.solve_ms += std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - begin).count();
+  report.solver_iterations += solved.iterations;
+  report.solver_converged = report.solver_converged && solved.converged;
+  if (!solved.ok) {
+    report.ok = false;
+    report.failure = failure + solved.error;
+  }
+  return solved.ok;
+}
+
 bool Integrator::spread_response(const std::vector<Vec3>& proposed, std::vector<Vec3>& motion, StepReport& report) {
   const Model& m = model_;
   Workspace& w = *work_;
@@ -264,16 +269,7 @@ bool Integrator::spread_response(const std::vector<Vec3>& proposed, std::vector<
     w.rhs.segment<3>(3 * a) = hold * (motion[v] - proposed[v]);
   }
   if (!changed) return false;
-  const auto begin = std::chrono::steady_clock::now();
-  const SolveReport solved = solver_->solve(w.matrix, w.rhs, w.solution);
-  report.solve_ms += std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - begin).count();
-  report.solver_iterations += solved.iterations;
-  report.solver_converged = report.solver_converged && solved.converged;
-  if (!solved.ok) {
-    report.ok = false;
-    report.failure = "the linear solver failed spreading the collision response: " + solved.error;
-    return true;
-  }
+  if (!solve(report, "the linear solver failed spreading the collision response: ")) return true;
   for (int v = 0; v < n; ++v) {
     const int a = w.free_index[v];
     if (a >= 0) motion[v] = proposed[v] + Vec3(w.solution.segment<3>(3 * a));

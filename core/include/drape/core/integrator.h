@@ -51,6 +51,9 @@ class Integrator {
 
  private:
   struct Workspace;
+  // The step's system (the workspace's matrix and right-hand side) solved into its solution;
+  // time and iterations added to report, and on failure report says so (failure, then why).
+  bool solve(StepReport& report, const std::string& failure);
   // The collision response (motion - proposed, on the contact vertices) spread through this
   // step's system: the system solved again with those vertices held to their new velocities;
   // motion receives the result. False when the response changed nothing.
