@@ -7,6 +7,7 @@
 #include <assimp/postprocess.h>
 #include <assimp/scene.h>
 
+#include <cctype>
 #include <cmath>
 #include <fstream>
 #include <iterator>
@@ -23,13 +24,25 @@ std::string assimp_format(const std::string& format) { return format == "obj" ? 
 
 namespace {
 
+// Whether assimp may take the bytes for PLY: its magic word in any case (assimp compares
+// without case; a file named .ply, or read as "ply", is checked whatever it starts with).
+bool looks_like_ply(std::string_view head) {
+  if (head.size() < 3) return false;
+  for (int i = 0; i < 3; ++i)
+    if (std::tolower(static_cast<unsigned char>(head[std::size_t(i)])) != "ply"[i]) return false;
+  return true;
+}
+
 // importer.ReadFile after check_ply on a PLY file's bytes (assimp 5.2 hangs or aborts on some
 // malformed PLY files: ply_check.h).
 const aiScene* read_file(Assimp::Importer& importer, const std::filesystem::path& path, unsigned flags) {
   std::ifstream in(path, std::ios::binary);
   char magic[3] = {};
   in.read(magic, 3);
-  if (in.gcount() == 3 && std::string_view(magic, 3) == "ply") {
+  std::string extension = path.extension().string();
+  for (char& c : extension) c = char(std::tolower(static_cast<unsigned char>(c)));
+  if (extension == ".ply" || looks_like_ply(std::string_view(magic, std::size_t(in.gcount())))) {
+    in.clear();
     in.seekg(0);
     const std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
     check_ply(bytes, path.string());
@@ -79,7 +92,7 @@ TriangleMesh load_mesh(const std::filesystem::path& path) {
 }
 
 TriangleMesh parse_mesh(const std::string& bytes, const std::string& format, const std::string& name) {
-  if (std::string_view(bytes).substr(0, 3) == "ply") check_ply(bytes, name);
+  if (format == "ply" || looks_like_ply(bytes)) check_ply(bytes, name);
   Assimp::Importer importer;
   const aiScene* scene =
       importer.ReadFileFromMemory(bytes.data(), bytes.size(), aiProcess_Triangulate | aiProcess_SortByPType, format.c_str());
