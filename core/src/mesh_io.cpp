@@ -20,10 +20,6 @@ namespace {
 // assimp's format ids: drape's "obj" is the Wavefront exporter that writes no .mtl file.
 std::string assimp_format(const std::string& format) { return format == "obj" ? "objnomtl" : format; }
 
-}  // namespace
-
-namespace {
-
 // Whether assimp may take the bytes for PLY: its magic word in any case (assimp compares
 // without case; a file named .ply, or read as "ply", is checked whatever it starts with).
 bool looks_like_ply(std::string_view head) {
@@ -33,21 +29,21 @@ bool looks_like_ply(std::string_view head) {
   return true;
 }
 
-// importer.ReadFile after check_ply on a PLY file's bytes (assimp 5.2 hangs or aborts on some
-// malformed PLY files: ply_check.h).
+// importer.ReadFile, but a PLY file is read once, checked (assimp 5.2 hangs or aborts on some
+// malformed PLY files: ply_check.h) and handed to assimp from memory.
 const aiScene* read_file(Assimp::Importer& importer, const std::filesystem::path& path, unsigned flags) {
   std::ifstream in(path, std::ios::binary);
   char magic[3] = {};
   in.read(magic, 3);
   std::string extension = path.extension().string();
   for (char& c : extension) c = char(std::tolower(static_cast<unsigned char>(c)));
-  if (extension == ".ply" || looks_like_ply(std::string_view(magic, std::size_t(in.gcount())))) {
-    in.clear();
-    in.seekg(0);
-    const std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-    check_ply(bytes, path.string());
-  }
-  return importer.ReadFile(path.string(), flags);
+  if (extension != ".ply" && !looks_like_ply(std::string_view(magic, std::size_t(in.gcount()))))
+    return importer.ReadFile(path.string(), flags);
+  in.clear();
+  in.seekg(0);
+  const std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  check_ply(bytes, path.string());
+  return importer.ReadFileFromMemory(bytes.data(), bytes.size(), flags, "ply");
 }
 
 // Every triangle of an imported scene into one mesh, welded (load_mesh); name in messages.
