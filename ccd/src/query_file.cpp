@@ -1,5 +1,7 @@
 #include "drape/ccd/query_file.h"
 
+#include "drape/ccd/input_file.h"
+
 #include <gmpxx.h>
 
 #include <cmath>
@@ -70,11 +72,13 @@ QueryFile read_query_file(const std::filesystem::path& path, std::optional<Query
          "cannot tell the query kind: no parent folder is named 'vertex-face' or 'edge-edge' (give --kind)");
   file.kind = *kind;
 
-  std::ifstream in(path);
-  if (!in) fail(path, 0, "cannot open the file for reading");
-  std::stringstream text;
-  text << in.rdbuf();
-  return parse_query_text(text.str(), path, file.kind);
+  std::string text;
+  try {
+    text = read_input_file(path, MAX_QUERY_BYTES, "query file");
+  } catch (const InputFileError& e) {
+    throw QueryFileError(e.what());
+  }
+  return parse_query_text(text, path, file.kind);
 }
 
 QueryFile parse_query_text(const std::string& text, const std::filesystem::path& path, QueryKind kind) {

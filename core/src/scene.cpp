@@ -1,5 +1,7 @@
 #include "drape/core/scene.h"
 
+#include "drape/ccd/input_file.h"
+
 #include <Eigen/Geometry>
 #include <cmath>
 #include <fstream>
@@ -44,6 +46,14 @@ using json = nlohmann::json;
 // Bounds that keep counts in an int and a run finite.
 constexpr int MAX_FRAME_STEPS = 100000;
 constexpr int MAX_FRAMES = 10000000;
+// No scene needs more; describing a value nested deeper could overflow the stack.
+constexpr std::size_t MAX_JSON_DEPTH = 64;
+
+std::string format_number(Scalar x) {
+  char text[32];
+  std::snprintf(text, sizeof text, "%g", x);
+  return text;
+}
 
 std::string describe(const json& value) {
   std::string text = value.dump();
@@ -135,6 +145,13 @@ class Node {
     if (!value_.is_array() || value_.size() != 3) fail("expected an array of 3 numbers, found " + describe(value_));
     return Vec3(at(std::size_t(0)).number(), at(1).number(), at(2).number());
   }
+  // A vector whose every coordinate is within bound (what the bound is, for the message).
+  Vec3 vec3_within(Scalar bound, const char* unit) const {
+    const Vec3 v = vec3();
+    if (!(v.cwiseAbs().maxCoeff() <= bound))
+      fail("expected coordinates within +-" + format_number(bound) + " " + unit + ", found " + describe(value_));
+    return v;
+  }
   Vec2 vec2() const {
     if (!value_.is_array() || value_.size() != 2) fail("expected an array of 2 numbers, found " + describe(value_));
     return Vec2(at(std::size_t(0)).number(), at(1).number());
@@ -153,7 +170,7 @@ class Node {
 Transform read_transform(const Node& n) {
   n.allow({"translate", "rotate", "scale"});
   Transform t;
-  if (n.has("translate")) t.translate = n.at("translate").vec3();
+  if (n.has("translate")) t.translate = n.at("translate").vec3_within(MAX_COORDINATE, "m");
   if (n.has("rotate")) {
     const Node r = n.at("rotate");
     if (!r.raw().is_array() || r.size() != 4) r.fail("expected [degrees, axis x, axis y, axis z]");
@@ -163,16 +180,16 @@ Transform read_transform(const Node& n) {
     // A length beyond a double's range normalises to zero or NaN.
     if (!std::isfinite(t.rotate_axis.norm())) r.fail("expected a rotation axis of finite length, found " + describe(r.raw()));
   }
-  if (n.has("scale")) t.scale = n.at("scale").positive();
+  if (n.has("scale")) t.scale = n.at("scale").number_in(MIN_SCALE, MAX_SCALE, "from 1e-6 to 1e6");
   return t;
 }
 
 Motion read_motion(const Node& n) {
   n.allow({"velocity", "angular_velocity", "center", "start", "end"});
   Motion m;
-  if (n.has("velocity")) m.velocity = n.at("velocity").vec3();
-  if (n.has("angular_velocity")) m.angular_velocity = n.at("angular_velocity").vec3();
-  if (n.has("center")) m.center = n.at("center").vec3();
+  if (n.has("velocity")) m.velocity = n.at("velocity").vec3_within(MAX_SPEED, "m/s");
+  if (n.has("angular_velocity")) m.angular_velocity = n.at("angular_velocity").vec3_within(MAX_ANGULAR_SPEED, "rad/s");
+  if (n.has("center")) m.center = n.at("center").vec3_within(MAX_COORDINATE, "m");
   if (n.has("start")) m.start = n.at("start").non_negative();
   if (n.has("end")) m.end = n.at("end").non_negative();
   if (!(m.end > m.start)) n.fail("'end' must be later than 'start'");
@@ -181,7 +198,7 @@ Motion read_motion(const Node& n) {
 
 Box read_box(const Node& n) {
   n.allow({"min", "max"});
-  Box b{n.at("min").vec3(), n.at("max").vec3()};
+  Box b{n.at("min").vec3_within(MAX_COORDINATE, "m"), n.at("max").vec3_within(MAX_COORDINATE, "m")};
   if (!(b.min.array() <= b.max.array()).all()) n.fail("expected min <= max in every coordinate");
   return b;
 }
@@ -196,7 +213,8 @@ ClothSpec read_cloth(const Node& n) {
     GridSpec spec;
     if (g.has("size")) {
       spec.size = g.at("size").vec2();
-      if (!(spec.size.minCoeff() > 0)) g.at("size").fail("expected two sizes > 0");
+      if (!(spec.size.minCoeff() > 0) || !(spec.size.maxCoeff() <= MAX_SIZE))
+        g.at("size").fail("expected two sizes > 0 and at most " + format_number(MAX_SIZE) + " m");
     }
     if (g.has("resolution")) {
       const Node r = g.at("resolution");
@@ -212,7 +230,7 @@ ClothSpec read_cloth(const Node& n) {
     c.mesh_file = n.at("mesh").file_path();
   }
   if (n.has("transform")) c.transform = read_transform(n.at("transform"));
-  if (n.has("velocity")) c.velocity = n.at("velocity").vec3();
+  if (n.has("velocity")) c.velocity = n.at("velocity").vec3_within(MAX_SPEED, "m/s");
   if (n.has("material")) {
     const Node m = n.at("material");
     m.allow({"density", "stretch", "shear", "bend", "damping", "air_damping"});
@@ -250,13 +268,13 @@ ObstacleSpec read_obstacle(const Node& n) {
     const Node s = n.at("sphere");
     s.allow({"center", "radius"});
     o.kind = ObstacleSpec::Kind::Sphere;
-    o.center = s.at("center").vec3();
-    o.radius = s.at("radius").positive();
+    o.center = s.at("center").vec3_within(MAX_COORDINATE, "m");
+    o.radius = s.at("radius").number_in(MIN_LENGTH, MAX_SIZE, "from 1e-6 to 1e4 (m)");
   } else if (n.has("plane")) {
     const Node p = n.at("plane");
     p.allow({"point", "normal"});
     o.kind = ObstacleSpec::Kind::Plane;
-    if (p.has("point")) o.point = p.at("point").vec3();
+    if (p.has("point")) o.point = p.at("point").vec3_within(MAX_COORDINATE, "m");
     if (p.has("normal")) o.normal = p.at("normal").vec3();
     if (!(o.normal.norm() > 0)) p.at("normal").fail("the normal must not be zero");
     // A length beyond a double's range normalises to zero or NaN.
@@ -284,6 +302,42 @@ std::string line_and_column(const std::string& text, std::size_t byte) {
   return "line " + std::to_string(line) + ", column " + std::to_string(column > 1 ? column - 1 : 1);
 }
 
+// Checks what nlohmann's parser lets through and the scene must not hold: nesting deeper
+// than MAX_JSON_DEPTH (a value that deep would overflow the stack of every recursive reader
+// after the parser) and a key given twice in one object (the parser keeps the last one
+// silently). Runs on text the parser accepted, so strings and brackets are well formed.
+void check_structure(const std::string& text, const std::filesystem::path& file) {
+  struct Level {
+    bool object;
+    std::set<std::string> keys;
+  };
+  std::vector<Level> levels;
+  for (std::size_t i = 0; i < text.size(); ++i) {
+    const char c = text[i];
+    if (c == '{' || c == '[') {
+      if (levels.size() == MAX_JSON_DEPTH)
+        throw SceneError(file.string() + ": " + line_and_column(text, i + 1) + ": expected at most " +
+                         std::to_string(MAX_JSON_DEPTH) + " levels of nested arrays and objects");
+      levels.push_back({c == '{', {}});
+    } else if (c == '}' || c == ']') {
+      if (!levels.empty()) levels.pop_back();
+    } else if (c == '"') {
+      const std::size_t start = i;
+      for (++i; i < text.size() && text[i] != '"'; ++i)
+        if (text[i] == '\\') ++i;
+      std::size_t next = i + 1;
+      while (next < text.size() && std::isspace(static_cast<unsigned char>(text[next]))) ++next;
+      const bool is_key = !levels.empty() && levels.back().object && next < text.size() && text[next] == ':';
+      if (!is_key) continue;
+      // The key decoded, so that "a" and "\u0061" are the same key.
+      const std::string key = json::parse(text.substr(start, i + 1 - start)).get<std::string>();
+      if (!levels.back().keys.insert(key).second)
+        throw SceneError(file.string() + ": " + line_and_column(text, start + 1) + ": the key '" + key +
+                         "' appears twice in the same object");
+    }
+  }
+}
+
 }  // namespace
 
 Scene parse_scene(const std::string& text, const std::filesystem::path& file) {
@@ -299,13 +353,14 @@ Scene parse_scene(const std::string& text, const std::filesystem::path& file) {
     if (const auto p = reason.find("] "); p != std::string::npos) reason = reason.substr(p + 2);
     throw SceneError(file.string() + ": invalid JSON: " + reason);
   }
+  check_structure(text, file);
   const Node n(root, "", file);
   n.allow({"frame_time", "frame_steps", "timestep", "end_time", "frames", "gravity", "cloths", "handles",
            "obstacles", "wind", "friction", "solver", "collisions", "output", "bounds", "render"});
   Scene s;
   s.file = file;
   if (n.has("comment")) s.comment = n.at("comment").string();
-  if (n.has("frame_time")) s.frame_time = n.at("frame_time").positive();
+  if (n.has("frame_time")) s.frame_time = n.at("frame_time").number_in(MIN_FRAME_TIME, MAX_FRAME_TIME, "from 1e-6 to 60 (s)");
   if (n.has("frame_steps") && n.has("timestep")) n.fail("give 'frame_steps' or 'timestep', not both");
   if (n.has("frame_steps")) s.frame_steps = n.at("frame_steps").integer_in(1, MAX_FRAME_STEPS);
   if (n.has("timestep")) {
@@ -325,7 +380,7 @@ Scene parse_scene(const std::string& text, const std::filesystem::path& file) {
     if (!(frames <= MAX_FRAMES)) n.at("end_time").fail("expected at most " + std::to_string(MAX_FRAMES) + " frames (end_time / frame_time)");
     s.frames = std::max(1, int(frames));
   }
-  if (n.has("gravity")) s.gravity = n.at("gravity").vec3();
+  if (n.has("gravity")) s.gravity = n.at("gravity").vec3_within(MAX_ACCELERATION, "m/s^2");
   for (const Node& c : n.at("cloths").array(1)) s.cloths.push_back(read_cloth(c));
   if (n.has("handles"))
     for (const Node& h : n.at("handles").array()) s.handles.push_back(read_handle(h, s.cloths.size()));
@@ -335,7 +390,7 @@ Scene parse_scene(const std::string& text, const std::filesystem::path& file) {
     const Node w = n.at("wind");
     w.allow({"velocity", "density", "drag"});
     WindSpec wind;
-    if (w.has("velocity")) wind.velocity = w.at("velocity").vec3();
+    if (w.has("velocity")) wind.velocity = w.at("velocity").vec3_within(MAX_SPEED, "m/s");
     if (w.has("density")) wind.density = w.at("density").non_negative();
     if (w.has("drag")) wind.drag = w.at("drag").non_negative();
     s.wind = wind;
@@ -353,7 +408,7 @@ Scene parse_scene(const std::string& text, const std::filesystem::path& file) {
     c.allow({"self", "obstacles", "thickness", "method", "max_impulse_iterations", "max_zone_iterations", "feature_boxes"});
     if (c.has("self")) s.collisions.self = c.at("self").boolean();
     if (c.has("obstacles")) s.collisions.obstacles = c.at("obstacles").boolean();
-    if (c.has("thickness")) s.collisions.thickness = c.at("thickness").non_negative();
+    if (c.has("thickness")) s.collisions.thickness = c.at("thickness").number_in(0, MAX_THICKNESS, "from 0 to 1 (m)");
     if (c.has("method"))
       s.collisions.method = *ccd::parse_method(c.at("method").one_of({"cubic", "dnf", "vincent", "conservative"}));
     if (c.has("max_impulse_iterations")) s.collisions.max_impulse_iterations = c.at("max_impulse_iterations").integer_in(0, 1000);
@@ -378,11 +433,13 @@ Scene parse_scene(const std::string& text, const std::filesystem::path& file) {
 }
 
 Scene load_scene(const std::filesystem::path& path) {
-  std::ifstream in(path);
-  if (!in) throw SceneError(path.string() + ": cannot open the scene file");
-  std::stringstream text;
-  text << in.rdbuf();
-  return parse_scene(text.str(), path);
+  std::string text;
+  try {
+    text = ccd::read_input_file(path, ccd::MAX_SCENE_BYTES, "scene file");
+  } catch (const ccd::InputFileError& e) {
+    throw SceneError(e.what());
+  }
+  return parse_scene(text, path);
 }
 
 }  // namespace drape

@@ -170,3 +170,34 @@ TEST(BadInput, CheckStatsNamesTheFile) {
     EXPECT_NE(check.output.find("found 2"), std::string::npos) << order << ": " << check.output;
   }
 }
+
+// Files that are not files: a device read whole would exhaust the memory, a symlink loop threw
+// an uncaught filesystem_error (validate, run and check died on a signal).
+TEST(BadInput, DevicesAndSymlinkLoopsAreRefusedWithAMessage) {
+  const Outcome device = run_drape("validate /dev/zero");
+  EXPECT_EQ(device.status, 2) << device.output;
+  EXPECT_NE(device.output.find("/dev/zero: expected a scene file, found a device, pipe or socket"), std::string::npos)
+      << device.output;
+  const Outcome queries = run_drape("ccd /dev/zero --kind vertex-face");
+  EXPECT_EQ(queries.status, 2) << queries.output;
+  EXPECT_NE(queries.output.find("/dev/zero: expected a query file, found a device"), std::string::npos) << queries.output;
+
+  const fs::path dir = temp_dir("symlink_loop");
+  fs::create_directories(dir);
+  fs::create_symlink("loop_b.obj", dir / "loop_a.obj");
+  fs::create_symlink("loop_a.obj", dir / "loop_b.obj");
+  std::ofstream(dir / "scene.json") << R"({"frames": 1, "cloths": [{"mesh": "loop_a.obj"}]})";
+  for (const std::string command : {"validate", "run"}) {
+    const Outcome run = run_drape(command + " " + (dir / "scene.json").string() + (command == "run" ? " --quiet" : ""));
+    EXPECT_EQ(run.status, 2) << command << ": " << run.output;
+    EXPECT_NE(run.output.find("/cloths/0/mesh: " + (dir / "loop_a.obj").string() + ": cannot read the mesh file: Too many levels of symbolic links"),
+              std::string::npos)
+        << command << ": " << run.output;
+  }
+  // A scene file that is itself a loop.
+  fs::create_symlink("loop_d.json", dir / "loop_c.json");
+  fs::create_symlink("loop_c.json", dir / "loop_d.json");
+  const Outcome scene = run_drape("validate " + (dir / "loop_c.json").string());
+  EXPECT_EQ(scene.status, 2) << scene.output;
+  EXPECT_EQ(scene.output.find("terminate"), std::string::npos) << scene.output;
+}

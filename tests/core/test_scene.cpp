@@ -73,7 +73,7 @@ TEST(Scene, HandlesByCornerNodeAndBox) {
 
 TEST(Scene, BadInputNamesTheFileThePathAndWhatWasExpected) {
   struct Case {
-    const char* text;
+    std::string text;
     const char* expected;
   };
   const Case cases[] = {
@@ -93,7 +93,7 @@ TEST(Scene, BadInputNamesTheFileThePathAndWhatWasExpected) {
       {R"({"cloths": [{"grid": {}}], "timestep": 1e-300})", "/timestep: expected at most 100000 steps per frame"},
       {R"({"cloths": [{"grid": {}}], "end_time": 1e300})", "/end_time: expected at most 10000000 frames"},
       {R"({"cloths": [{"grid": {}}], "obstacles": [{"sphere": {"center": [0, 0, 0], "radius": 0}}]})",
-       "/obstacles/0/sphere/radius: expected a number > 0"},
+       "/obstacles/0/sphere/radius: expected a number from 1e-6 to 1e4 (m), found 0"},
       {R"({"cloths": [{"grid": {}}], "obstacles": [{"plane": {"normal": [0, 0, 0]}}]})", "/obstacles/0/plane/normal: the normal must not be zero"},
       {R"({"cloths": [{"grid": {}}], "handles": [{"nodes": [100000]}]})", "/handles/0/nodes/0: vertex 100000 does not exist"},
       {R"({"cloths": [{"grid": {}}], "handles": [{"cloth": 1, "nodes": [0]}]})", "/handles/0/cloth: expected an integer from 0 to 0"},
@@ -131,11 +131,45 @@ TEST(Scene, BadInputNamesTheFileThePathAndWhatWasExpected) {
       {R"({"cloths": [{"grid": {}}], "frame_steps": 10, "timestep": 0.001})",
        "bad.json: /: give 'frame_steps' or 'timestep', not both"},
       {R"({"cloths": [{"grid": {}}], "render": 3})", "bad.json: /render: expected an object"},
+      // Hostile input: numbers that validate one by one but make a run meaningless or
+      // non-finite, duplicate keys, nesting that would overflow a recursive reader.
+      {R"({"cloths": [{"grid": {"size": [1e308, 1e308]}}]})",
+       "bad.json: /cloths/0/grid/size: expected two sizes > 0 and at most 10000 m"},
+      {R"({"cloths": [{"grid": {}, "transform": {"translate": [1e308, 0, 0]}}]})",
+       "bad.json: /cloths/0/transform/translate: expected coordinates within +-1e+07 m"},
+      {R"({"cloths": [{"grid": {"size": [1000, 1000]}, "transform": {"translate": [9.9e6, 0, 0], "scale": 1e6}}]})",
+       "bad.json: /cloths/0: vertex 0 lands at ("},
+      {R"({"cloths": [{"grid": {}, "transform": {"scale": 1e300}}]})",
+       "bad.json: /cloths/0/transform/scale: expected a number from 1e-6 to 1e6"},
+      {R"({"cloths": [{"grid": {}, "velocity": [0, 0, -1e300]}]})",
+       "bad.json: /cloths/0/velocity: expected coordinates within +-100000 m/s"},
+      {R"({"cloths": [{"grid": {}}], "gravity": [0, 0, -1e300]})", "bad.json: /gravity: expected coordinates within +-10000 m/s^2"},
+      {R"({"cloths": [{"grid": {}}], "collisions": {"thickness": 10}})",
+       "bad.json: /collisions/thickness: expected a number from 0 to 1 (m), found 10"},
+      {R"({"cloths": [{"grid": {"size": [0.1, 0.1]}}], "collisions": {"thickness": 0.5}})",
+       "bad.json: /collisions/thickness: the thickness (0.5 m) is more than a quarter of cloth 0's diagonal"},
+      {R"({"cloths": [{"grid": {}}], "frame_time": 1e300})", "bad.json: /frame_time: expected a number from 1e-6 to 60 (s)"},
+      {R"({"frames": 3, "cloths": [{"grid": {}}], "frames": 4})",
+       "bad.json: line 1, column 41: the key 'frames' appears twice in the same object"},
+      {R"({"cloths": [{"grid": {"size": [1, 1], "s\u0069ze": [2, 2]}}]})",
+       "bad.json: line 1, column 39: the key 'size' appears twice in the same object"},
+      {"{\"cloths\": " + std::string(100000, '[') + std::string(100000, ']') + "}",
+       "bad.json: line 1, column 75: expected at most 64 levels of nested arrays and objects"},
   };
   for (const Case& c : cases) {
     const std::string message = error_of(c.text);
-    EXPECT_NE(message.find(c.expected), std::string::npos) << "scene: " << c.text << "\nmessage: " << message;
+    EXPECT_NE(message.find(c.expected), std::string::npos) << "scene: " << c.text.substr(0, 200) << "\nmessage: " << message;
   }
+}
+
+// A grid the schema accepts but no ordinary machine can run: refused with the estimate,
+// before anything of its size is allocated.
+TEST(Scene, AGridBeyondTheMachinesMemoryIsRefusedWithTheEstimate) {
+  const std::string message = error_of(R"({"cloths": [{"grid": {"resolution": [4096, 4096]}}]})");
+  if (message.empty()) GTEST_SKIP() << "this machine has the memory of a 4096 x 4096 run (about 256 GiB)";
+  EXPECT_NE(message.find("bad.json: /cloths: the cloths have 16785409 vertices; a run needs about 256 GiB of memory"),
+            std::string::npos)
+      << message;
 }
 
 TEST(Scene, JsonSyntaxErrorsGiveLineAndColumn) {

@@ -26,6 +26,21 @@ class SceneError : public std::runtime_error {
   using std::runtime_error::runtime_error;
 };
 
+/// Bounds on a scene's numbers beyond which a run means nothing (or its arithmetic breaks
+/// down); validation rejects a value outside them, naming the key. docs/scenes.md lists them.
+inline constexpr Scalar MAX_COORDINATE = 1e7;     ///< m: positions (translate, centres, points, boxes, vertices)
+inline constexpr Scalar MAX_SIZE = 1e4;           ///< m: grid sizes, sphere radii
+inline constexpr Scalar MIN_LENGTH = 1e-6;        ///< m: sphere radii
+inline constexpr Scalar MIN_SCALE = 1e-6;         ///< transform scale
+inline constexpr Scalar MAX_SCALE = 1e6;          ///< transform scale
+inline constexpr Scalar MAX_SPEED = 1e5;          ///< m/s: initial, handle, obstacle and wind velocities
+inline constexpr Scalar MAX_ANGULAR_SPEED = 1e4;  ///< rad/s: motion angular velocities
+inline constexpr Scalar MAX_ACCELERATION = 1e4;   ///< m/s^2: gravity
+inline constexpr Scalar MAX_THICKNESS = 1;        ///< m: collisions.thickness (see also the cloth-size rule in build_model)
+inline constexpr Scalar MAX_THICKNESS_OF_CLOTH = 0.25;  ///< collisions.thickness at most this times each cloth's diagonal
+inline constexpr Scalar MIN_FRAME_TIME = 1e-6;    ///< s
+inline constexpr Scalar MAX_FRAME_TIME = 60;      ///< s
+
 /// x' = R (scale x) + translate, R a rotation of rotate_degrees about rotate_axis (ARCSim's
 /// "rotate": [degrees, x, y, z]).
 struct Transform {
