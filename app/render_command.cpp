@@ -2,7 +2,9 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <atomic>
 #include <chrono>
+#include <csignal>
 #include <iostream>
 #include <regex>
 
@@ -15,6 +17,9 @@
 namespace drape::app {
 
 namespace fs = std::filesystem;
+
+std::atomic<bool> render_interrupted{false};
+extern "C" void on_render_interrupt(int) { render_interrupted.store(true); }
 
 int render_run(const fs::path& folder, const RenderOptions& options) {
   std::optional<RunFolder> run = open_run_folder(folder, "render");
@@ -53,7 +58,16 @@ int render_run(const fs::path& folder, const RenderOptions& options) {
     const auto begin = std::chrono::steady_clock::now();
     const bool terminal = isatty(STDERR_FILENO);
     std::size_t done = 0;
+    // Ctrl-C finishes the frame in hand and stops: no partial image, an earlier video kept.
+    std::signal(SIGINT, on_render_interrupt);
+    std::signal(SIGTERM, on_render_interrupt);
     for (const auto& [frame, path] : frames) {
+      if (render_interrupted.load()) {
+        video.reset();  // removes the unfinished video
+        std::cerr << (terminal ? "\n" : "") << "drape render: interrupted after " << done
+                  << " frames; the PNG frames written are whole, an earlier video.mp4 is kept\n";
+        return EXIT_RUN_STOPPED;
+      }
       const std::vector<Vec3> x = load_frame_positions(path, topology);
       const render::Image image = renderer->render(model, x, frame * model.scene.frame_time, camera);
       char name[32];
@@ -76,6 +90,11 @@ int render_run(const fs::path& folder, const RenderOptions& options) {
       std::cerr << "\n";
     }
   } catch (const std::exception& e) {
+    // Ctrl-C reaches ffmpeg too (one process group): its broken pipe is the interruption.
+    if (render_interrupted.load()) {
+      std::cerr << "\ndrape render: interrupted; the PNG frames written are whole, an earlier video.mp4 is kept\n";
+      return EXIT_RUN_STOPPED;
+    }
     std::cerr << "\ndrape render: " << e.what() << " (the simulation output is untouched)\n";
     return EXIT_BAD_INPUT;
   }

@@ -62,6 +62,7 @@ struct RunArguments {
   bool check = false;
   std::string method;
   bool render = false;
+  bool overwrite = false;
   std::string resolution;
 };
 
@@ -106,6 +107,7 @@ int run(const RunArguments& args) {
   settings.write_meshes = scene.output.meshes;
   settings.threads = args.threads;
   settings.check_penetrations = args.check;
+  settings.overwrite = args.overwrite;
   if (!args.quiet)
     std::cerr << "drape run: " << args.scene << ": " << model->vertex_count() << " vertices, " << model->springs.size()
               << " springs, " << settings.frames << " frames of " << scene.frame_steps << " steps; output in "
@@ -145,10 +147,11 @@ Command add_run_command(CLI::App& app) {
       "  frame_00000.obj ...  the cloth at each frame (frame 0 is the initial state)\n"
       "  stats.csv            one row per frame: timings, solver iterations, energies, stretch,\n"
       "                       distance to the obstacles\n"
-      "  scene.json           a copy of the scene\n"
+      "  scene.json, meshes/  a copy of the scene and of its meshes: the folder is complete by itself\n"
       "  render/*.png, video.mp4  with --render (or the scene's render.enabled)\n"
-      "A run that has to stop (solver failure, NaN, the cloth leaving the scene bounds, Ctrl-C)\n"
-      "says which frame and why, exits with status 3 and keeps every frame written so far.\n\n"
+      "A run that has to stop (solver failure, NaN, the cloth leaving the scene bounds, a full\n"
+      "disk, Ctrl-C) says which frame and why, exits with status 3 and keeps every frame written\n"
+      "so far. A folder holding an earlier run is refused (status 2) unless --overwrite.\n\n"
       "Examples:\n"
       "  drape run scenes/drape_sphere.json\n"
       "  drape run scenes/flag.json --frames 10 --out /tmp/flag --quiet");
@@ -163,6 +166,9 @@ Command add_run_command(CLI::App& app) {
       ->check(CLI::IsMember({"cubic", "dnf", "vincent", "conservative"}));
   cmd->add_flag("--render", args->render, "Then render PNG frames and an MP4 video (see 'drape render --help')");
   cmd->add_option("--resolution", args->resolution, "With --render: WIDTHxHEIGHT, overriding the scene's");
+  cmd->add_flag("--overwrite", args->overwrite,
+                "Replace an earlier run in the output folder (its frames, stats.csv, scene copy, renders); without it\n"
+                "a run into a folder holding another one refuses");
   cmd->add_flag("--check", args->check, "Run the independent penetration check on every frame (column penetrations)");
   return [args] { return run(*args); };
 }

@@ -15,6 +15,7 @@
 #include <utility>
 #include <vector>
 
+#include "drape/ccd/input_file.h"
 #include "drape/core/scene.h"
 
 namespace drape::app {
@@ -32,17 +33,21 @@ inline Scene run_folder_scene(const std::filesystem::path& folder) {
   const bool found = std::filesystem::exists(copy, error);
   if (error) throw SceneError(copy.string() + ": cannot look for the scene copy: " + error.message());
   if (!found) throw SceneError(copy.string() + ": not found: is this a drape run folder?");
-  std::ifstream in(copy);
-  if (!in) throw SceneError(copy.string() + ": cannot open the scene copy");
-  std::stringstream text;
-  text << in.rdbuf();
+  std::string text;
+  try {
+    text = ccd::read_input_file(copy, ccd::MAX_SCENE_BYTES, "scene copy");
+  } catch (const ccd::InputFileError& e) {
+    throw SceneError(e.what());
+  }
+  // A run folder holds copies of its meshes (meshes/) and reads as itself; one written by an
+  // earlier drape names the scene it came from in scene_path.txt instead.
   std::filesystem::path origin = copy;
   if (std::ifstream where{folder / "scene_path.txt"}; where) {
     std::string line;
     std::getline(where, line);
     if (!line.empty() && std::filesystem::exists(line, error)) origin = line;
   }
-  return parse_scene(text.str(), origin);
+  return parse_scene(text, origin);
 }
 
 /// The saved frames frame_NNNNN.<mesh extension>, by frame number. Throws RunFolderError when
@@ -94,6 +99,24 @@ inline std::optional<RunFolder> open_run_folder(const std::filesystem::path& fol
   }
   if (run.frames.empty()) {
     std::cerr << "drape " << command << ": " << folder.string() << ": no frame_*.* meshes\n";
+    return std::nullopt;
+  }
+  // A run writes frames 0, 1, 2, ... in order and stops at the first it cannot write: a gap
+  // means files were lost or mixed in, and checking or rendering around it would mislead.
+  std::vector<int> missing;
+  for (int expected = 0, k = 0; k < int(run.frames.size()); ++expected) {
+    if (run.frames[std::size_t(k)].first == expected) ++k;
+    else if (run.frames[std::size_t(k)].first < expected) ++k;  // the same number twice (two formats)
+    else missing.push_back(expected);
+    if (missing.size() > 5) break;
+  }
+  if (!missing.empty()) {
+    std::string list;
+    for (std::size_t i = 0; i < std::min<std::size_t>(missing.size(), 5); ++i)
+      list += (i ? ", " : "") + std::to_string(missing[i]);
+    std::cerr << "drape " << command << ": " << folder.string() << ": frame" << (missing.size() > 1 ? "s " : " ") << list
+              << (missing.size() > 5 ? " and more" : "") << " missing (the folder has frames up to "
+              << run.frames.back().first << ")\n";
     return std::nullopt;
   }
   return run;

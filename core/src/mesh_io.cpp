@@ -1,13 +1,19 @@
 #include "drape/core/mesh_io.h"
 
 #include "ply_check.h"
+#include "drape/ccd/input_file.h"
+#include "drape/core/output_file.h"
 
 #include <assimp/Exporter.hpp>
 #include <assimp/Importer.hpp>
 #include <assimp/postprocess.h>
 #include <assimp/scene.h>
 
+#include <array>
 #include <cctype>
+#include <charconv>
+#include <cstdio>
+#include <cstdlib>
 #include <cmath>
 #include <fstream>
 #include <iterator>
@@ -32,6 +38,11 @@ bool looks_like_ply(std::string_view head) {
 // importer.ReadFile, but a PLY file is read once, checked (assimp 5.2 hangs or aborts on some
 // malformed PLY files: ply_check.h) and handed to assimp from memory.
 const aiScene* read_file(Assimp::Importer& importer, const std::filesystem::path& path, unsigned flags) {
+  try {
+    ccd::check_input_file(path, ccd::MAX_MESH_BYTES, "mesh file");
+  } catch (const ccd::InputFileError& e) {
+    throw MeshFileError(e.what());
+  }
   std::ifstream in(path, std::ios::binary);
   char magic[3] = {};
   in.read(magic, 3);
@@ -78,10 +89,79 @@ TriangleMesh mesh_of(const Assimp::Importer& importer, const aiScene* scene, con
   return mesh;
 }
 
+// A Wavefront OBJ of the mesh, every coordinate with 17 significant digits so that it reads
+// back as the same double: assimp's exporter writes single precision.
+std::string obj_text(const TriangleMesh& mesh) {
+  std::string text = "# drape frame: " + std::to_string(mesh.vertices.size()) + " vertices, " +
+                     std::to_string(mesh.triangles.size()) + " triangles\n";
+  text.reserve(text.size() + mesh.vertices.size() * 72 + mesh.triangles.size() * 24);
+  char line[128];
+  for (const Vec3& v : mesh.vertices) {
+    const int n = std::snprintf(line, sizeof line, "v %.17g %.17g %.17g\n", v.x(), v.y(), v.z());
+    text.append(line, std::size_t(n));
+  }
+  for (const Triangle& t : mesh.triangles) {
+    const int n = std::snprintf(line, sizeof line, "f %d %d %d\n", t[0] + 1, t[1] + 1, t[2] + 1);
+    text.append(line, std::size_t(n));
+  }
+  return text;
+}
+
+// The triangles of an OBJ file as corner positions in double precision, in file order: "v"
+// lines and "f" lines (a polygon as the fan assimp makes of it); other lines are skipped.
+std::vector<std::array<Vec3, 3>> obj_triangles(const std::string& text, const std::string& name) {
+  std::vector<Vec3> vertices;
+  std::vector<std::array<Vec3, 3>> triangles;
+  std::size_t line_number = 0;
+  std::size_t begin = 0;
+  while (begin < text.size()) {
+    std::size_t end = text.find('\n', begin);
+    if (end == std::string::npos) end = text.size();
+    const std::string line = text.substr(begin, end - begin);
+    begin = end + 1;
+    ++line_number;
+    const auto where = [&] { return name + ":" + std::to_string(line_number) + ": "; };
+    if (line.rfind("v ", 0) == 0 || line.rfind("v\t", 0) == 0) {
+      double x, y, z;
+      char* next = nullptr;
+      const char* p = line.c_str() + 2;
+      x = std::strtod(p, &next);
+      if (next == p) throw MeshFileError(where() + "expected three coordinates after 'v'");
+      p = next, y = std::strtod(p, &next);
+      if (next == p) throw MeshFileError(where() + "expected three coordinates after 'v'");
+      p = next, z = std::strtod(p, &next);
+      if (next == p) throw MeshFileError(where() + "expected three coordinates after 'v'");
+      vertices.emplace_back(x, y, z);
+    } else if (line.rfind("f ", 0) == 0 || line.rfind("f\t", 0) == 0) {
+      std::vector<Vec3> corners;
+      std::size_t p = 2;
+      while (p < line.size()) {
+        while (p < line.size() && std::isspace(static_cast<unsigned char>(line[p]))) ++p;
+        if (p >= line.size()) break;
+        const std::size_t token_end = line.find_first_of(" \t\r", p);
+        const std::string token = line.substr(p, token_end == std::string::npos ? std::string::npos : token_end - p);
+        p = token_end == std::string::npos ? line.size() : token_end;
+        long index = 0;
+        const std::string number = token.substr(0, token.find('/'));
+        const auto [rest, problem] = std::from_chars(number.data(), number.data() + number.size(), index);
+        if (problem != std::errc() || rest != number.data() + number.size() || index == 0)
+          throw MeshFileError(where() + "expected a vertex index, found '" + token + "'");
+        // Negative indices count back from the last vertex read.
+        const long resolved = index > 0 ? index - 1 : long(vertices.size()) + index;
+        if (resolved < 0 || resolved >= long(vertices.size()))
+          throw MeshFileError(where() + "vertex index " + number + " refers to no vertex read so far");
+        corners.push_back(vertices[std::size_t(resolved)]);
+      }
+      if (corners.size() < 3) continue;  // assimp reads these as points and lines
+      for (std::size_t k = 1; k + 1 < corners.size(); ++k) triangles.push_back({corners[0], corners[k], corners[k + 1]});
+    }
+  }
+  return triangles;
+}
+
 }  // namespace
 
 TriangleMesh load_mesh(const std::filesystem::path& path) {
-  if (!std::filesystem::is_regular_file(path)) throw MeshFileError(path.string() + ": no such mesh file");
   Assimp::Importer importer;
   const aiScene* scene = read_file(importer, path, aiProcess_Triangulate | aiProcess_SortByPType);
   return mesh_of(importer, scene, path.string());
@@ -96,27 +176,40 @@ TriangleMesh parse_mesh(const std::string& bytes, const std::string& format, con
 }
 
 std::vector<Vec3> load_frame_positions(const std::filesystem::path& path, const TriangleMesh& topology) {
-  Assimp::Importer importer;
-  const aiScene* scene = read_file(importer, path, aiProcess_Triangulate);
-  if (!scene || !scene->mRootNode) throw MeshFileError(path.string() + ": cannot read the mesh: " + importer.GetErrorString());
-  std::vector<Vec3> positions(topology.vertices.size(), Vec3::Zero());
-  std::size_t face = 0;  // every triangle of the file is counted, those beyond the topology too
-  for (unsigned m = 0; m < scene->mNumMeshes; ++m) {
-    const aiMesh* part = scene->mMeshes[m];
-    for (unsigned f = 0; f < part->mNumFaces; ++f) {
-      if (part->mFaces[f].mNumIndices != 3) continue;  // points and lines
-      if (face < topology.triangles.size()) {
+  // The file's triangles as corner positions: an OBJ read by drape itself in double precision
+  // (assimp reads single precision), any other format through assimp.
+  std::vector<std::array<Vec3, 3>> triangles;
+  std::string extension = path.extension().string();
+  for (char& c : extension) c = char(std::tolower(static_cast<unsigned char>(c)));
+  if (extension == ".obj") {
+    try {
+      triangles = obj_triangles(ccd::read_input_file(path, ccd::MAX_MESH_BYTES, "mesh file"), path.string());
+    } catch (const ccd::InputFileError& e) {
+      throw MeshFileError(e.what());
+    }
+  } else {
+    Assimp::Importer importer;
+    const aiScene* scene = read_file(importer, path, aiProcess_Triangulate);
+    if (!scene || !scene->mRootNode) throw MeshFileError(path.string() + ": cannot read the mesh: " + importer.GetErrorString());
+    for (unsigned m = 0; m < scene->mNumMeshes; ++m) {
+      const aiMesh* part = scene->mMeshes[m];
+      for (unsigned f = 0; f < part->mNumFaces; ++f) {
+        if (part->mFaces[f].mNumIndices != 3) continue;  // points and lines
+        std::array<Vec3, 3> corners;
         for (int k = 0; k < 3; ++k) {
           const aiVector3D& p = part->mVertices[part->mFaces[f].mIndices[k]];
-          positions[topology.triangles[face][k]] = Vec3(p.x, p.y, p.z);
+          corners[std::size_t(k)] = Vec3(p.x, p.y, p.z);
         }
+        triangles.push_back(corners);
       }
-      ++face;
     }
   }
-  if (face != topology.triangles.size())
+  if (triangles.size() != topology.triangles.size())
     throw MeshFileError(path.string() + ": expected " + std::to_string(topology.triangles.size()) + " triangles, found " +
-                        std::to_string(face));
+                        std::to_string(triangles.size()));
+  std::vector<Vec3> positions(topology.vertices.size(), Vec3::Zero());
+  for (std::size_t f = 0; f < triangles.size(); ++f)
+    for (int k = 0; k < 3; ++k) positions[std::size_t(topology.triangles[f][k])] = triangles[f][std::size_t(k)];
   for (std::size_t v = 0; v < positions.size(); ++v)
     if (!positions[v].allFinite())
       throw MeshFileError(path.string() + ": vertex " + std::to_string(v) + " has a non-finite coordinate");
@@ -142,6 +235,14 @@ std::string mesh_extension(const std::string& format) {
 }
 
 void save_mesh(const std::filesystem::path& path, const TriangleMesh& mesh, const std::string& format) {
+  if (format == "obj") {
+    try {
+      write_file_atomically(path, obj_text(mesh));
+    } catch (const OutputError& e) {
+      throw MeshFileError(e.what());
+    }
+    return;
+  }
   aiScene scene;  // owns and frees everything attached below
   scene.mRootNode = new aiNode();
   scene.mMaterials = new aiMaterial*[1]{new aiMaterial()};
@@ -164,16 +265,17 @@ void save_mesh(const std::filesystem::path& path, const TriangleMesh& mesh, cons
     out->mFaces[f].mIndices = new unsigned[3]{unsigned(mesh.triangles[f][0]), unsigned(mesh.triangles[f][1]),
                                               unsigned(mesh.triangles[f][2])};
   }
-  const std::filesystem::path temporary = path.string() + ".partial";
+  // Exported to memory, then written by drape's checked writer (assimp's file writer does not
+  // report a full disk).
   Assimp::Exporter exporter;
-  if (exporter.Export(&scene, assimp_format(format), temporary.string()) != AI_SUCCESS) {
-    std::error_code ignored;
-    std::filesystem::remove(temporary, ignored);
-    throw MeshFileError(path.string() + ": cannot write the mesh: " + exporter.GetErrorString());
+  const aiExportDataBlob* blob = exporter.ExportToBlob(&scene, assimp_format(format));
+  if (!blob) throw MeshFileError(path.string() + ": cannot write the mesh: " + exporter.GetErrorString());
+  if (blob->next) throw MeshFileError(path.string() + ": the " + format + " exporter writes more than one file");
+  try {
+    write_file_atomically(path, std::string_view(static_cast<const char*>(blob->data), blob->size));
+  } catch (const OutputError& e) {
+    throw MeshFileError(e.what());
   }
-  std::error_code error;
-  std::filesystem::rename(temporary, path, error);
-  if (error) throw MeshFileError(path.string() + ": cannot move the finished mesh into place: " + error.message());
 }
 
 }  // namespace drape

@@ -5,7 +5,13 @@
 #include <fstream>
 #include <stdexcept>
 
+#include <nlohmann/json.hpp>
+#include <regex>
+#include <vector>
+
+#include "drape/ccd/input_file.h"
 #include "drape/core/mesh_io.h"
+#include "drape/core/output_file.h"
 #include "drape/core/obstacle.h"
 #include "drape/core/penetration.h"
 
@@ -43,24 +49,6 @@ std::filesystem::path mesh_path(const std::filesystem::path& out, int frame, con
 
 namespace {
 
-// stats.csv, one whole row per write, flushed at once: a reader or a crash never sees half a row.
-class StatsFile {
- public:
-  explicit StatsFile(const std::filesystem::path& path) : file_(std::fopen(path.c_str(), "w")) {
-    if (!file_) throw std::runtime_error(path.string() + ": cannot write the statistics file");
-    write(stats_header());
-  }
-  ~StatsFile() { std::fclose(file_); }
-  void write(const std::string& row) {
-    const std::string line = row + "\n";
-    std::fwrite(line.data(), 1, line.size(), file_);
-    std::fflush(file_);
-  }
-
- private:
-  std::FILE* file_;
-};
-
 FrameStats measure(const Model& model, const State& state, int frame) {
   FrameStats s;
   s.frame = frame;
@@ -75,37 +63,109 @@ FrameStats measure(const Model& model, const State& state, int frame) {
   return s;
 }
 
+
+bool is_run_file(const std::filesystem::path& name) {
+  const std::string file = name.filename().string();
+  static const std::regex run_file(R"((frame_\d+\..*|stats\.csv|scene\.json|scene_path\.txt|meshes|render|video\.mp4)(\.partial)?)");
+  return std::regex_match(file, run_file);
+}
+
+void prepare_run_folder(const std::filesystem::path& out, bool overwrite) {
+  std::error_code error;
+  std::filesystem::create_directories(out, error);
+  if (error || !std::filesystem::is_directory(out))
+    throw RunSetupError(out.string() + ": cannot create the output folder" + (error ? ": " + error.message() : ""));
+  std::vector<std::filesystem::path> old;
+  try {
+    for (const auto& entry : std::filesystem::directory_iterator(out))
+      if (is_run_file(entry.path())) old.push_back(entry.path());
+  } catch (const std::filesystem::filesystem_error& e) {
+    throw RunSetupError(out.string() + ": cannot list the output folder: " + e.code().message());
+  }
+  if (old.empty()) return;
+  if (!overwrite)
+    throw RunSetupError(out.string() + ": the folder holds another run (" + old.front().filename().string() +
+                        (old.size() > 1 ? " and " + std::to_string(old.size() - 1) + " more" : "") +
+                        "); give --overwrite to replace it, or another --out");
+  for (const auto& path : old) {
+    std::filesystem::remove_all(path, error);
+    if (error) throw RunSetupError(path.string() + ": cannot remove the earlier run's file: " + error.message());
+  }
+}
+
+void write_run_inputs(const Scene& scene, const std::filesystem::path& out) {
+  // A scene parsed from text (a test, an API user) has no file to copy.
+  std::error_code error;
+  if (scene.file.empty() || !std::filesystem::is_regular_file(scene.file, error)) return;
+  std::string text;
+  try {
+    text = ccd::read_input_file(scene.file, ccd::MAX_SCENE_BYTES, "scene file");
+  } catch (const ccd::InputFileError& e) {
+    throw RunSetupError(e.what());
+  }
+  // The scene as given, with each mesh path pointing at a copy in meshes/: the folder alone
+  // is enough to check and render the run, whatever happens to the original files later.
+  nlohmann::ordered_json root = nlohmann::ordered_json::parse(text);
+  const auto copy_mesh = [&](nlohmann::ordered_json& entry, const std::filesystem::path& source, const std::string& name) {
+    const std::string relative = "meshes/" + name + source.extension().string();
+    std::filesystem::create_directories(out / "meshes", error);
+    if (error) throw RunSetupError((out / "meshes").string() + ": cannot create the folder: " + error.message());
+    try {
+      write_file_atomically(out / relative, ccd::read_input_file(source, ccd::MAX_MESH_BYTES, "mesh file"));
+    } catch (const ccd::InputFileError& e) {
+      throw RunSetupError(e.what());
+    }
+    entry["mesh"] = relative;
+  };
+  for (std::size_t c = 0; c < scene.cloths.size(); ++c)
+    if (!scene.cloths[c].grid) copy_mesh(root["cloths"][c], scene.cloths[c].mesh_file, "cloth_" + std::to_string(c));
+  for (std::size_t o = 0; o < scene.obstacles.size(); ++o)
+    if (scene.obstacles[o].kind == ObstacleSpec::Kind::Mesh)
+      copy_mesh(root["obstacles"][o], scene.obstacles[o].mesh_file, "obstacle_" + std::to_string(o));
+  write_file_atomically(out / "scene.json", root.dump(2) + "\n");
+}
+
 }  // namespace
 
 RunOutcome run_simulation(const Model& model, const RunSettings& settings, const std::atomic<bool>& interrupt,
                           const std::function<void(const FrameStats&)>& on_frame) {
-  std::error_code error;
-  std::filesystem::create_directories(settings.out, error);
-  if (error || !std::filesystem::is_directory(settings.out))
-    throw std::runtime_error(settings.out.string() + ": cannot create the output folder" +
-                             (error ? ": " + error.message() : ""));
-  // A copy of the scene beside its results.
-  if (!model.scene.file.empty() && std::filesystem::is_regular_file(model.scene.file)) {
-    std::filesystem::copy_file(model.scene.file, settings.out / "scene.json",
-                               std::filesystem::copy_options::overwrite_existing, error);
-    if (error) throw std::runtime_error((settings.out / "scene.json").string() + ": cannot copy the scene: " + error.message());
-    // Where the scene came from: its mesh paths are relative to that folder.
-    std::ofstream(settings.out / "scene_path.txt") << std::filesystem::absolute(model.scene.file).string() << "\n";
+  prepare_run_folder(settings.out, settings.overwrite);
+  try {
+    write_run_inputs(model.scene, settings.out);
+  } catch (const OutputError& e) {
+    throw RunSetupError(e.what());
   }
-  StatsFile stats(stats_path(settings.out));
+  std::optional<LineFile> stats;
+  try {
+    stats.emplace(stats_path(settings.out));
+    stats->write_line(stats_header());
+  } catch (const OutputError& e) {
+    throw RunSetupError(e.what());
+  }
   const std::string& format = model.scene.output.mesh_format;
+  // Writes the frame's mesh then its row: a row in stats.csv means its frame is complete.
   const auto write_frame = [&](const State& state, FrameStats row) {
     if (settings.check_penetrations) row.penetrations = int(find_penetrations(model, state.positions, state.time).size());
     if (settings.write_meshes) save_mesh(mesh_path(settings.out, row.frame, format), model.cloth_mesh(state.positions), format);
-    stats.write(stats_row(row));
+    stats->write_line(stats_row(row));
     if (on_frame) on_frame(row);
+  };
+  RunOutcome outcome;
+  const auto stop_on_write_error = [&](const std::string& what, int frame) {
+    outcome.end = RunEnd::Stopped;
+    outcome.message = "cannot write frame " + std::to_string(frame) + ": " + what +
+                      (frame > 0 ? "; frames 0 to " + std::to_string(frame - 1) + " are written" : "");
+    return outcome;
   };
 
   State state = initial_state(model);
   Integrator integrator(model, make_linear_solver(model.scene.solver), settings.threads);
-  write_frame(state, measure(model, state, 0));
+  try {
+    write_frame(state, measure(model, state, 0));
+  } catch (const std::runtime_error& e) {  // OutputError, MeshFileError
+    return stop_on_write_error(e.what(), 0);
+  }
 
-  RunOutcome outcome;
   for (int frame = 1; frame <= settings.frames; ++frame) {
     FrameStats totals;
     const auto begin = std::chrono::steady_clock::now();
@@ -136,7 +196,11 @@ RunOutcome run_simulation(const Model& model, const RunSettings& settings, const
     row.obstacle_contacts = totals.obstacle_contacts;
     row.solver_warnings = totals.solver_warnings;
     row.collisions = totals.collisions;
-    write_frame(state, row);
+    try {
+      write_frame(state, row);
+    } catch (const std::runtime_error& e) {
+      return stop_on_write_error(e.what(), frame);
+    }
     outcome.frames_done = frame;
   }
   return outcome;

@@ -18,7 +18,9 @@ void write_png(const std::filesystem::path& path, const Image& image) {
   if (!png || !info || setjmp(png_jmpbuf(png))) {
     png_destroy_write_struct(&png, &info);
     std::fclose(file);
-    throw RenderError(path.string() + ": libpng failed to write the image");
+    std::error_code ignored;
+    std::filesystem::remove(partial, ignored);
+    throw RenderError(path.string() + ": libpng failed to write the image (is the disk full?)");
   }
   png_init_io(png, file);
   png_set_IHDR(png, info, image.width, image.height, 8, PNG_COLOR_TYPE_RGB, PNG_INTERLACE_NONE,
@@ -28,13 +30,21 @@ void write_png(const std::filesystem::path& path, const Image& image) {
     png_write_row(png, const_cast<png_bytep>(image.rgb.data() + std::size_t(y) * image.width * 3));
   png_write_end(png, nullptr);
   png_destroy_write_struct(&png, &info);
-  if (std::fclose(file) != 0) throw RenderError(path.string() + ": cannot finish writing the image");
+  if (std::fclose(file) != 0) {
+    std::error_code ignored;
+    std::filesystem::remove(partial, ignored);
+    throw RenderError(path.string() + ": cannot finish writing the image (is the disk full?)");
+  }
   std::error_code error;
   std::filesystem::rename(partial, path, error);
   if (error) throw RenderError(path.string() + ": " + error.message());
 }
 
 bool VideoWriter::ffmpeg_available() { return std::system("command -v ffmpeg >/dev/null 2>&1") == 0; }
+
+// ffmpeg writes here; close() renames it onto the video's path once ffmpeg has finished, so an
+// interrupted or failed render leaves an earlier video whole.
+std::filesystem::path partial_video(const std::filesystem::path& path) { return path.string() + ".partial"; }
 
 VideoWriter::VideoWriter(const std::filesystem::path& path, int width, int height, double fps)
     : path_(path), width_(width), height_(height) {
@@ -43,8 +53,8 @@ VideoWriter::VideoWriter(const std::filesystem::path& path, int width, int heigh
   char command[1024];
   std::snprintf(command, sizeof command,
                 "ffmpeg -loglevel error -y -f rawvideo -pix_fmt rgb24 -s %dx%d -r %.6f -i - "
-                "-vf 'pad=ceil(iw/2)*2:ceil(ih/2)*2' -c:v libx264 -pix_fmt yuv420p -movflags +faststart '%s'",
-                width, height, fps, path.c_str());
+                "-vf 'pad=ceil(iw/2)*2:ceil(ih/2)*2' -c:v libx264 -pix_fmt yuv420p -movflags +faststart -f mp4 '%s'",
+                width, height, fps, partial_video(path).c_str());
   // A dead ffmpeg must surface as a write error, not kill drape with SIGPIPE.
   std::signal(SIGPIPE, SIG_IGN);
   pipe_ = popen(command, "w");
@@ -60,11 +70,21 @@ void VideoWriter::close() {
   if (!pipe_) return;
   const int status = pclose(pipe_);
   pipe_ = nullptr;
-  if (status != 0) throw RenderError(path_.string() + ": ffmpeg failed to encode the video");
+  std::error_code error;
+  if (status != 0) {
+    std::filesystem::remove(partial_video(path_), error);
+    throw RenderError(path_.string() + ": ffmpeg failed to encode the video (an earlier video is kept)");
+  }
+  std::filesystem::rename(partial_video(path_), path_, error);
+  if (error) throw RenderError(path_.string() + ": cannot move the finished video into place: " + error.message());
 }
 
 VideoWriter::~VideoWriter() {
-  if (pipe_) pclose(pipe_);
+  if (!pipe_) return;
+  // Not closed: the render failed or was interrupted. The unfinished file goes.
+  pclose(pipe_);
+  std::error_code ignored;
+  std::filesystem::remove(partial_video(path_), ignored);
 }
 
 }  // namespace drape::render

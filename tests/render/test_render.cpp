@@ -70,7 +70,7 @@ TEST(Render, SimulatingAloneNeverCreatesAGlContext) {
   EXPECT_FALSE(fs::exists(plain / "render"));
   ::setenv("DRAPE_NO_GL", "1", 1);
   const auto blocked = run_drape("run " + scene + rendered.string() + " --render");
-  const auto plain_again = run_drape("run " + scene + plain.string());
+  const auto plain_again = run_drape("run " + scene + plain.string() + " --overwrite");
   ::unsetenv("DRAPE_NO_GL");
   EXPECT_EQ(plain_again.status, 0) << plain_again.output;
   EXPECT_NE(blocked.status, 0);
@@ -166,4 +166,26 @@ TEST(Render, BadRenderSectionsNameThePathAndWhatWasExpected) {
   EXPECT_EQ(settings.width, 16);
   EXPECT_EQ(settings.height, 8192);
   EXPECT_EQ(settings.samples, 4);
+}
+
+// Ctrl-C during a render (SIGINT to drape and, through the process group, to ffmpeg): status 3,
+// the earlier video whole and in place, no partial image or video left behind.
+TEST(Render, AnInterruptedRenderKeepsTheEarlierVideo) {
+  const fs::path out = temp_dir("interrupted");
+  ASSERT_EQ(run_drape("run " + SOURCE + "/scenes/hanging.json --frames 60 --quiet --out " + out.string()).status, 0);
+  ASSERT_EQ(run_drape("render --resolution 64x48 --quiet " + out.string()).status, 0);
+  const auto read = [](const fs::path& path) {
+    std::ifstream in(path, std::ios::binary);
+    return std::string((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  };
+  const std::string earlier = read(out / "video.mp4");
+  ASSERT_GT(earlier.size(), 1000u);
+  // 60 frames at 1920 x 1080 take seconds; the interrupt comes after half of one.
+  const std::string status = shell("timeout --preserve-status -s INT 0.5 " + std::string(DRAPE_EXECUTABLE) +
+                                   " render --resolution 1920x1080 --quiet " + out.string() + " >/dev/null 2>&1; echo $?");
+  if (status == "0\n") GTEST_SKIP() << "the render finished within half a second";
+  EXPECT_EQ(status, "3\n");
+  EXPECT_EQ(read(out / "video.mp4"), earlier);
+  for (const auto& entry : fs::recursive_directory_iterator(out))
+    EXPECT_NE(entry.path().extension(), ".partial") << entry.path();
 }

@@ -7,6 +7,7 @@
 #include <filesystem>
 #include <functional>
 #include <optional>
+#include <stdexcept>
 #include <string>
 
 #include "drape/core/integrator.h"
@@ -39,6 +40,14 @@ struct RunSettings {
   bool write_meshes = true;
   int threads = 1;            ///< collision narrow-phase threads
   bool check_penetrations = false;  ///< run the independent intersection check on every frame
+  bool overwrite = false;     ///< replace an earlier run's files in out (else refuse)
+};
+
+/// A run that cannot start: the output folder cannot be created or listed, holds another run
+/// (without overwrite), or the scene and its meshes cannot be copied into it. Bad input.
+class RunSetupError : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
 };
 
 enum class RunEnd { Completed, Stopped, Interrupted };
@@ -54,9 +63,12 @@ std::filesystem::path mesh_path(const std::filesystem::path& out, int frame, con
 inline std::filesystem::path stats_path(const std::filesystem::path& out) { return out / "stats.csv"; }
 
 /// Simulates and writes frame 0 (the initial state) then settings.frames frames: the meshes,
-/// stats.csv, and a copy of the scene (scene.json). interrupt is polled between steps.
-/// on_frame is called after each frame is written. Throws std::runtime_error when the output
-/// folder cannot be written.
+/// stats.csv, and a copy of the scene (scene.json, its mesh paths pointing at copies of the
+/// meshes in meshes/, so the folder is complete by itself). An earlier run's files in the
+/// folder are removed first with settings.overwrite, else the run refuses. interrupt is
+/// polled between steps; on_frame is called after each frame is written. A write that fails
+/// during the run (a full disk) stops it, RunEnd::Stopped naming the file, with every earlier
+/// frame and row whole. Throws RunSetupError when the run cannot start.
 RunOutcome run_simulation(const Model& model, const RunSettings& settings, const std::atomic<bool>& interrupt,
                           const std::function<void(const FrameStats&)>& on_frame);
 
