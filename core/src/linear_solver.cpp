@@ -33,6 +33,10 @@ class CholmodSolver final : public LinearSolver {
       report.error = "CHOLMOD could not factorise the system matrix (not positive definite)";
       return report;
     }
+    return solve_again(b, x);
+  }
+  SolveReport solve_again(const VectorX& b, VectorX& x) override {
+    SolveReport report;
     x = llt_.solve(b);
     report.iterations = 1;
     if (llt_.info() != Eigen::Success || !x.allFinite()) {
@@ -68,8 +72,11 @@ class ConjugateGradientSolver final : public LinearSolver {
     cg_.setMaxIterations(spec.max_iterations);
   }
   SolveReport solve(const SparseMatrix& A, const VectorX& b, VectorX& x) override {
-    SolveReport report;
     cg_.compute(A);
+    return solve_again(b, x);
+  }
+  SolveReport solve_again(const VectorX& b, VectorX& x) override {
+    SolveReport report;
     x = cg_.solveWithGuess(b, x);
     report.iterations = int(cg_.iterations());
     report.residual = cg_.error();

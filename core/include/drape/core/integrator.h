@@ -33,7 +33,23 @@ struct StepReport {
   double solve_ms = 0;        ///< assembly excluded
   int obstacle_contacts = 0;  ///< vertices projected out of analytic obstacles
   CollisionCounters collisions;  ///< the collision pipeline's work (zero when not needed)
+  /// J: energy the scene's sources may have put into the cloth this step, each source's work
+  /// counted when positive: the handles (the force that keeps each pinned vertex on its path,
+  /// times its displacement), the wind (drag and air damping towards the wind's velocity),
+  /// and moving obstacles (the kinetic energy their contacts added). Gravity is not here: its
+  /// potential is part of potential_energy. A run's energy stays below its start plus the sum
+  /// of these (docs/scenes.md, "limits").
+  Scalar external_work = 0;
+  /// Steps taken again as two half steps because they made energy (see Integrator::step).
+  int step_halvings = 0;
+  /// Adds another step's report: counts, times and work summed, the first failure kept.
+  void add(const StepReport& other);
 };
+
+/// The scene's energy scale, J: the kinetic energy at the start plus the total mass times
+/// gravity times the diagonal of everything's extent at the start (a fall across the scene).
+/// Tolerances on energy are fractions of it.
+Scalar energy_scale(const Model& model);
 
 /// Holds what a run reuses from step to step: the system's sparsity pattern with each spring's
 /// place in it, and the linear solver (whose symbolic analysis CHOLMOD keeps).
@@ -43,7 +59,9 @@ class Integrator {
   Integrator(const Model& model, std::unique_ptr<LinearSolver> solver, int threads = 1);
   ~Integrator();
   /// One step of the scene's timestep: forces -> implicit solve -> analytic obstacles ->
-  /// collision pipeline (broad phase, narrow phase, response) -> positions -> checks.
+  /// collision pipeline (broad phase, narrow phase, response) -> positions -> checks. A step
+  /// that ends with more energy than it began with plus its sources' work (beyond a
+  /// tolerance) is taken again as two half steps, up to six halvings deep (1/64 of the step).
   StepReport step(State& state);
   const LinearSolver& solver() const { return *solver_; }
   /// The collision pipeline, or nullptr when the scene needs none.
@@ -54,14 +72,29 @@ class Integrator {
   // The step's system (the workspace's matrix and right-hand side) solved into its solution;
   // time and iterations added to report, and on failure report says so (failure, then why).
   bool solve(StepReport& report, const std::string& failure);
-  // The collision response (motion - proposed, on the contact vertices) spread through this
-  // step's system: the system solved again with those vertices held to their new velocities;
-  // motion receives the result. False when the response changed nothing.
-  bool spread_response(const std::vector<Vec3>& proposed, std::vector<Vec3>& motion, StepReport& report);
+  // The collision response (motion and velocities less solved, on the contact vertices)
+  // spread through this step's system: solved again with those vertices held to their new
+  // motion, then (the same factorisation) to their new velocities; motion and velocities
+  // receive the results. False when the response changed nothing.
+  bool spread_response(const std::vector<Vec3>& solved, std::vector<Vec3>& motion, std::vector<Vec3>& velocities,
+                       StepReport& report);
+  // One step of size h_, unchecked.
+  StepReport advance(State& state);
+  // advance, halving the step where it makes energy (step's contract).
+  StepReport advance_within_energy(State& state, Scalar h, int halvings);
+  // The response to contact: analytic obstacles, then the collision pipeline; changes motion
+  // and the state's velocities.
+  void respond(State& state, std::vector<Vec3>& motion, StepReport& report);
+  // The step's positive work of the handles and of the air (with wind), for the energy ledger
+  // (StepReport::external_work); velocities are the solve's.
+  Scalar source_work(const std::vector<Vec3>& pinned_dv, const std::vector<Vec3>& air_forces,
+                     const std::vector<Vec3>& velocities) const;
   const Model& model_;
   std::unique_ptr<LinearSolver> solver_;
   std::unique_ptr<CollisionPipeline> collisions_;  // only when the scene needs it
   std::unique_ptr<Workspace> work_;
+  Scalar h_ = 0;                 // the step being taken: the scene's timestep or a part of it
+  Scalar energy_tolerance_ = 0;  // J, see STEP_ENERGY_TOLERANCE
 };
 
 /// Diagnostics for the frame statistics.

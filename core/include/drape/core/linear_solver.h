@@ -29,6 +29,9 @@ class LinearSolver {
   /// Solves A x = b for a symmetric positive definite A (both triangles stored). x holds a
   /// starting guess on entry (used by iterative solvers).
   virtual SolveReport solve(const SparseMatrix& A, const VectorX& b, VectorX& x) = 0;
+  /// Solves with the matrix of the last solve() again, for another right-hand side (a direct
+  /// solver reuses its factorisation).
+  virtual SolveReport solve_again(const VectorX& b, VectorX& x) = 0;
   /// How many times the symbolic analysis ran (direct solvers); 0 for iterative ones.
   virtual int analyses() const { return 0; }
 };
