@@ -5,6 +5,7 @@
 #include <csignal>
 #include <cstdio>
 #include <iostream>
+#include <set>
 
 #include "commands.h"
 #include "drape/core/run.h"
@@ -29,6 +30,7 @@ class Progress {
  public:
   Progress(int frames, bool quiet) : frames_(frames), quiet_(quiet), terminal_(isatty(STDERR_FILENO)) {}
   void frame(const FrameStats& s) {
+    warn(s);
     if (quiet_ || s.frame == 0) return;
     const double elapsed = std::chrono::duration<double>(std::chrono::steady_clock::now() - start_).count();
     const double left = elapsed / s.frame * (frames_ - s.frame);
@@ -46,8 +48,27 @@ class Progress {
   void end_line() {
     if (terminal_ && !quiet_) std::fprintf(stderr, "\n");
   }
+  // After the run: how many frames passed a limit (each said when it first happened).
+  void summary() const {
+    if (warned_frames_ > 0)
+      std::fprintf(stderr, "drape run: warning: %d frame(s) passed a limit (column warnings of stats.csv; docs/scenes.md, \"limits\")\n",
+                   warned_frames_);
+  }
 
  private:
+  // A limit passed: said on the terminal the first time for each kind, even with --quiet (a
+  // warning is not progress), counted always.
+  void warn(const FrameStats& s) {
+    if (s.warnings > 0) ++warned_frames_;
+    for (const std::string& message : s.messages) {
+      const std::string kind = message.substr(0, message.find(' '));
+      if (!said_.insert(kind).second) continue;
+      if (terminal_ && !quiet_) std::fprintf(stderr, "\n");
+      std::fprintf(stderr, "drape run: warning: frame %d: %s (said once; later frames are counted)\n", s.frame, message.c_str());
+    }
+  }
+  int warned_frames_ = 0;
+  std::set<std::string> said_;
   int frames_;
   bool quiet_, terminal_;
   std::chrono::steady_clock::time_point start_ = std::chrono::steady_clock::now();
@@ -124,6 +145,7 @@ int run(const RunArguments& args) {
     std::cerr << "drape run: " << e.what() << "\n";
     return EXIT_BAD_INPUT;
   }
+  progress.summary();
   if (outcome.end != RunEnd::Completed) {
     progress.end_line();
     if (args.render || wants_render) std::cerr << "drape run: not rendering a run that stopped; 'drape render' can\n";

@@ -20,7 +20,8 @@ namespace drape {
 std::string stats_header() {
   return "frame,sim_time,wall_ms,solve_ms,solver_iterations,kinetic_energy,potential_energy,max_stretch,"
          "min_distance_obstacle,obstacle_contacts,solver_warnings,bvh_pairs,vf_tests,ee_tests,culled,separated,root_solves,"
-         "ccd_hits,impulse_iterations,impact_zones,proximity_impulses,rest_clamped_pairs,fail_safes,ccd_ms,response_ms,penetrations";
+         "ccd_hits,impulse_iterations,impact_zones,proximity_impulses,rest_clamped_pairs,fail_safes,ccd_ms,response_ms,penetrations,"
+         "external_work,energy_excess,step_halvings,warnings";
 }
 
 std::string stats_row(const FrameStats& s) {
@@ -31,13 +32,14 @@ std::string stats_row(const FrameStats& s) {
   if (s.penetrations) std::snprintf(penetrations, sizeof penetrations, "%d", *s.penetrations);
   const CollisionCounters& c = s.collisions;
   std::snprintf(buffer, sizeof buffer,
-                "%d,%.17g,%.3f,%.3f,%ld,%.17g,%.17g,%.17g,%s,%d,%d,%ld,%ld,%ld,%llu,%llu,%llu,%ld,%ld,%ld,%ld,%ld,%ld,%.3f,%.3f,%s",
+                "%d,%.17g,%.3f,%.3f,%ld,%.17g,%.17g,%.17g,%s,%d,%d,%ld,%ld,%ld,%llu,%llu,%llu,%ld,%ld,%ld,%ld,%ld,%ld,%.3f,%.3f,%s,"
+                "%.17g,%.17g,%d,%d",
                 s.frame, s.sim_time, s.wall_ms, s.solve_ms, s.solver_iterations, s.kinetic_energy, s.potential_energy,
                 s.max_stretch, distance, s.obstacle_contacts, s.solver_warnings, c.bvh_pairs, c.vf_tests, c.ee_tests,
                 static_cast<unsigned long long>(c.tests.culled), static_cast<unsigned long long>(c.tests.separated),
                 static_cast<unsigned long long>(c.tests.root_solves),
                 c.ccd_hits, c.impulse_iterations, c.impact_zones, c.proximity_impulses, c.rest_clamped_pairs, c.fail_safes, c.ccd_ms,
-                c.response_ms, penetrations);
+                c.response_ms, penetrations, s.external_work, s.energy_excess, s.step_halvings, s.warnings);
   return buffer;
 }
 
@@ -135,6 +137,7 @@ RunOutcome run_simulation(const Model& model, const RunSettings& settings, const
   } catch (const OutputError& e) {
     throw RunSetupError(e.what());
   }
+  State state = initial_state(model);
   std::optional<LineFile> stats;
   try {
     stats.emplace(stats_path(settings.out));
@@ -151,6 +154,10 @@ RunOutcome run_simulation(const Model& model, const RunSettings& settings, const
     if (on_frame) on_frame(row);
   };
   RunOutcome outcome;
+  const RunLimits& limits = model.scene.limits;
+  const Scalar scale = energy_scale(model);
+  const Scalar energy_start = kinetic_energy(model, state) + potential_energy(model, state);
+  Scalar external_work = 0;
   const auto stop_on_write_error = [&](const std::string& what, int frame) {
     outcome.end = RunEnd::Stopped;
     outcome.message = "cannot write frame " + std::to_string(frame) + ": " + what +
@@ -158,7 +165,6 @@ RunOutcome run_simulation(const Model& model, const RunSettings& settings, const
     return outcome;
   };
 
-  State state = initial_state(model);
   Integrator integrator(model, make_linear_solver(model.scene.solver), settings.threads);
   try {
     write_frame(state, measure(model, state, 0));
@@ -182,6 +188,8 @@ RunOutcome run_simulation(const Model& model, const RunSettings& settings, const
       totals.obstacle_contacts += r.obstacle_contacts;
       totals.solver_warnings += !r.solver_converged;
       totals.collisions.add(r.collisions);
+      totals.step_halvings += r.step_halvings;
+      external_work += r.external_work;
       if (!r.ok) {
         outcome.end = RunEnd::Stopped;
         outcome.message = "frame " + std::to_string(frame) + " (t = " + std::to_string(state.time) + " s): " +
@@ -196,12 +204,43 @@ RunOutcome run_simulation(const Model& model, const RunSettings& settings, const
     row.obstacle_contacts = totals.obstacle_contacts;
     row.solver_warnings = totals.solver_warnings;
     row.collisions = totals.collisions;
+    row.step_halvings = totals.step_halvings;
+    row.external_work = external_work;
+    row.energy_excess = row.kinetic_energy + row.potential_energy - (energy_start + external_work);
+    // The limits: a warning counted and said, or a stop that keeps this frame.
+    char text[512];
+    std::string stop;
+    if (row.energy_excess > limits.energy_warn * scale) {
+      ++row.warnings;
+      std::snprintf(text, sizeof text,
+                    "energy %.4g J is %.3g J above its start plus the sources' work (%.4g J); the limits are %.3g J to "
+                    "warn and %.3g J to stop (limits.energy_warn and energy_stop times the scene's energy scale, %.4g J)",
+                    row.kinetic_energy + row.potential_energy, row.energy_excess, energy_start + external_work,
+                    limits.energy_warn * scale, limits.energy_stop * scale, scale);
+      row.messages.push_back(text);
+      if (row.energy_excess > limits.energy_stop * scale) stop = text;
+    }
+    if (row.max_stretch > limits.stretch_warn) {
+      ++row.warnings;
+      std::snprintf(text, sizeof text,
+                    "a spring is stretched to %.4g times its rest length; the limits are %.4g to warn and %.4g to stop "
+                    "(limits.stretch_warn and stretch_stop)",
+                    row.max_stretch, limits.stretch_warn, limits.stretch_stop);
+      row.messages.push_back(text);
+      if (row.max_stretch > limits.stretch_stop && stop.empty()) stop = text;
+    }
     try {
       write_frame(state, row);
     } catch (const std::runtime_error& e) {
       return stop_on_write_error(e.what(), frame);
     }
     outcome.frames_done = frame;
+    if (!stop.empty()) {
+      outcome.end = RunEnd::Stopped;
+      outcome.message = "frame " + std::to_string(frame) + ": " + stop + "; frames 0 to " + std::to_string(frame) +
+                        " are written";
+      return outcome;
+    }
   }
   return outcome;
 }

@@ -356,7 +356,7 @@ Scene parse_scene(const std::string& text, const std::filesystem::path& file) {
   check_structure(text, file);
   const Node n(root, "", file);
   n.allow({"frame_time", "frame_steps", "timestep", "end_time", "frames", "gravity", "cloths", "handles",
-           "obstacles", "wind", "friction", "solver", "collisions", "output", "bounds", "render"});
+           "obstacles", "wind", "friction", "solver", "collisions", "output", "bounds", "render", "limits"});
   Scene s;
   s.file = file;
   if (n.has("comment")) s.comment = n.at("comment").string();
@@ -424,6 +424,17 @@ Scene parse_scene(const std::string& text, const std::filesystem::path& file) {
   }
   if (s.output.folder.empty()) s.output.folder = std::filesystem::path("out") / file.stem();
   if (n.has("bounds")) s.bounds = read_box(n.at("bounds"));  // build_model checks it holds the cloths
+  if (n.has("limits")) {
+    const Node l = n.at("limits");
+    l.allow({"energy_warn", "energy_stop", "stretch_warn", "stretch_stop"});
+    RunLimits& limits = s.limits;
+    if (l.has("energy_warn")) limits.energy_warn = l.at("energy_warn").number_in(0, 1e6, "from 0 to 1e6");
+    if (l.has("energy_stop")) limits.energy_stop = l.at("energy_stop").number_in(0, 1e6, "from 0 to 1e6");
+    if (l.has("stretch_warn")) limits.stretch_warn = l.at("stretch_warn").number_in(1, 1e6, "from 1 to 1e6");
+    if (l.has("stretch_stop")) limits.stretch_stop = l.at("stretch_stop").number_in(1, 1e6, "from 1 to 1e6");
+    if (!(limits.energy_stop >= limits.energy_warn)) l.fail("expected energy_stop >= energy_warn");
+    if (!(limits.stretch_stop >= limits.stretch_warn)) l.fail("expected stretch_stop >= stretch_warn");
+  }
   if (n.has("render")) {
     const Node r = n.at("render");
     if (!r.raw().is_object()) r.fail("expected an object");

@@ -9,6 +9,7 @@
 #include <optional>
 #include <stdexcept>
 #include <string>
+#include <vector>
 
 #include "drape/core/integrator.h"
 
@@ -29,6 +30,11 @@ struct FrameStats {
   int solver_warnings = 0;     ///< cg solves that stopped at the iteration cap
   CollisionCounters collisions;  ///< the collision pipeline, summed over the frame's steps
   std::optional<int> penetrations;  ///< intersecting triangle pairs by the independent check, when enabled
+  Scalar external_work = 0;    ///< J, summed since the start: the sources' work (StepReport::external_work)
+  Scalar energy_excess = 0;    ///< J: kinetic plus potential energy less (its start plus external_work)
+  int step_halvings = 0;       ///< steps taken again as two half steps (Integrator::step)
+  int warnings = 0;            ///< limits passed this frame: energy, stretch (0 to 2)
+  std::vector<std::string> messages;  ///< what each warning says, for the terminal (not a column)
 };
 
 std::string stats_header();

@@ -152,6 +152,18 @@ struct OutputSpec {
   bool meshes = true;            ///< write the cloth mesh of every frame
 };
 
+/// When a run warns and when it stops for energy and stretch (the "limits" section). Energy is
+/// held against its start plus the work of the scene's sources (handles, wind, moving
+/// obstacles; gravity is in the potential energy), with a margin that is a fraction of the
+/// scene's energy scale (energy_scale in integrator.h: a fall across the scene). Stretch is the
+/// largest structural spring's length over its rest length.
+struct RunLimits {
+  Scalar energy_warn = 0.05;  ///< a frame whose energy exceeds the bound by this much warns
+  Scalar energy_stop = 0.5;   ///< and by this much stops the run (status 3)
+  Scalar stretch_warn = 1.25; ///< a frame stretched beyond this warns
+  Scalar stretch_stop = 2.0;  ///< and beyond this stops the run
+};
+
 struct Scene {
   std::filesystem::path file;  ///< the scene file, when read from one
   std::string comment;
@@ -171,6 +183,7 @@ struct Scene {
   /// bounding box of everything, grown by 100 times its diagonal.
   std::optional<Box> bounds;
   std::string render_json;  ///< the render section, kept verbatim for the renderer
+  RunLimits limits;
 
   Scalar timestep() const { return frame_time / frame_steps; }
 };
