@@ -5,7 +5,9 @@ triangles). box.obj: a unit cube centred on the origin, each face a 4x4 grid (19
 disc_30cm.obj: the Cusick drape test's specimen, a 30 cm disc in z = 0 of 25 concentric rings
 (ring k holds 6k vertices, 6 mm apart: 1,951 vertices, 3,750 triangles), the mesh a user brings.
 cusick_support.obj: an 18 cm disc support, a closed cylinder of radius 0.09 m and height 0.3 m
-standing on z = 0 (64 segments around)."""
+standing on z = 0 (64 segments around). table.obj: a table, a top 1.2 x 0.8 x 0.04 m at 0.75 m and
+four legs 0.05 x 0.05 m under it, each a separate closed box of 4x4 quads a face (the table-like
+mesh obstacle of issue 19's tablecloth)."""
 import math, os
 
 def write(path, vertices, faces, comment):
@@ -121,6 +123,21 @@ def cylinder(radius, height, segments, cap_rings):
             faces.append((outer + i, outer + j, centre) if up else (outer + j, outer + i, centre))
     return vertices, faces
 
+def boxes(parts, n):
+    """Closed boxes, each (centre, size), in one mesh."""
+    unit_v, unit_f = box(n)
+    vertices, faces = [], []
+    for centre, size in parts:
+        first = len(vertices)
+        vertices += [tuple(c + s * x for c, s, x in zip(centre, size, p)) for p in unit_v]
+        faces += [(a + first, b + first, c + first) for a, b, c in unit_f]
+    return vertices, faces
+
+def table():
+    top = ((0.0, 0.0, 0.73), (1.2, 0.8, 0.04))
+    legs = [((x * 0.55, y * 0.35, 0.355), (0.05, 0.05, 0.71)) for x in (-1, 1) for y in (-1, 1)]
+    return boxes([top] + legs, 4)
+
 here = os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "scenes", "meshes")
 os.makedirs(here, exist_ok=True)
 write(os.path.join(here, "icosphere.obj"), *icosphere(3), "unit icosphere, 3 subdivisions (tools/make_meshes.py)")
@@ -128,3 +145,5 @@ write(os.path.join(here, "box.obj"), *box(4), "unit cube, 4x4 quads a face (tool
 write(os.path.join(here, "disc_30cm.obj"), *disc(0.15, 25), "30 cm disc, 25 rings 6 mm apart (tools/make_meshes.py)")
 write(os.path.join(here, "cusick_support.obj"), *cylinder(0.09, 0.3, 64, 4),
       "18 cm support: cylinder r 0.09 m, h 0.3 m on z = 0 (tools/make_meshes.py)")
+write(os.path.join(here, "table.obj"), *table(),
+      "table: top 1.2 x 0.8 x 0.04 m at 0.75 m, four 0.05 m legs, separate boxes (tools/make_meshes.py)")

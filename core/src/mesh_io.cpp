@@ -175,45 +175,59 @@ TriangleMesh parse_mesh(const std::string& bytes, const std::string& format, con
   return mesh_of(importer, scene, name);
 }
 
-std::vector<Vec3> load_frame_positions(const std::filesystem::path& path, const TriangleMesh& topology) {
-  // The file's triangles as corner positions: an OBJ read by drape itself in double precision
-  // (assimp reads single precision), any other format through assimp.
-  std::vector<std::array<Vec3, 3>> triangles;
-  std::string extension = path.extension().string();
-  for (char& c : extension) c = char(std::tolower(static_cast<unsigned char>(c)));
-  if (extension == ".obj") {
-    try {
-      triangles = obj_triangles(ccd::read_input_file(path, ccd::MAX_MESH_BYTES, "mesh file"), path.string());
-    } catch (const ccd::InputFileError& e) {
-      throw MeshFileError(e.what());
-    }
-  } else {
-    Assimp::Importer importer;
-    const aiScene* scene = read_file(importer, path, aiProcess_Triangulate);
-    if (!scene || !scene->mRootNode) throw MeshFileError(path.string() + ": cannot read the mesh: " + importer.GetErrorString());
-    for (unsigned m = 0; m < scene->mNumMeshes; ++m) {
-      const aiMesh* part = scene->mMeshes[m];
-      for (unsigned f = 0; f < part->mNumFaces; ++f) {
-        if (part->mFaces[f].mNumIndices != 3) continue;  // points and lines
-        std::array<Vec3, 3> corners;
-        for (int k = 0; k < 3; ++k) {
-          const aiVector3D& p = part->mVertices[part->mFaces[f].mIndices[k]];
-          corners[std::size_t(k)] = Vec3(p.x, p.y, p.z);
-        }
-        triangles.push_back(corners);
-      }
-    }
-  }
+namespace {
+
+// The positions of topology's vertices from a file's triangles (corners in file order).
+std::vector<Vec3> positions_of(const std::vector<std::array<Vec3, 3>>& triangles, const TriangleMesh& topology,
+                               const std::string& name) {
   if (triangles.size() != topology.triangles.size())
-    throw MeshFileError(path.string() + ": expected " + std::to_string(topology.triangles.size()) + " triangles, found " +
+    throw MeshFileError(name + ": expected " + std::to_string(topology.triangles.size()) + " triangles, found " +
                         std::to_string(triangles.size()));
   std::vector<Vec3> positions(topology.vertices.size(), Vec3::Zero());
   for (std::size_t f = 0; f < triangles.size(); ++f)
     for (int k = 0; k < 3; ++k) positions[std::size_t(topology.triangles[f][k])] = triangles[f][std::size_t(k)];
   for (std::size_t v = 0; v < positions.size(); ++v)
-    if (!positions[v].allFinite())
-      throw MeshFileError(path.string() + ": vertex " + std::to_string(v) + " has a non-finite coordinate");
+    if (!positions[v].allFinite()) throw MeshFileError(name + ": vertex " + std::to_string(v) + " has a non-finite coordinate");
   return positions;
+}
+
+}  // namespace
+
+std::vector<Vec3> parse_frame_positions(const std::string& obj_bytes, const std::string& name, const TriangleMesh& topology) {
+  return positions_of(obj_triangles(obj_bytes, name), topology, name);
+}
+
+std::vector<Vec3> load_frame_positions(const std::filesystem::path& path, const TriangleMesh& topology) {
+  // An OBJ is read by drape itself in double precision (assimp reads single precision), any
+  // other format through assimp.
+  std::string extension = path.extension().string();
+  for (char& c : extension) c = char(std::tolower(static_cast<unsigned char>(c)));
+  if (extension == ".obj") {
+    std::string bytes;
+    try {
+      bytes = ccd::read_input_file(path, ccd::MAX_MESH_BYTES, "mesh file");
+    } catch (const ccd::InputFileError& e) {
+      throw MeshFileError(e.what());
+    }
+    return parse_frame_positions(bytes, path.string(), topology);
+  }
+  std::vector<std::array<Vec3, 3>> triangles;
+  Assimp::Importer importer;
+  const aiScene* scene = read_file(importer, path, aiProcess_Triangulate);
+  if (!scene || !scene->mRootNode) throw MeshFileError(path.string() + ": cannot read the mesh: " + importer.GetErrorString());
+  for (unsigned m = 0; m < scene->mNumMeshes; ++m) {
+    const aiMesh* part = scene->mMeshes[m];
+    for (unsigned f = 0; f < part->mNumFaces; ++f) {
+      if (part->mFaces[f].mNumIndices != 3) continue;  // points and lines
+      std::array<Vec3, 3> corners;
+      for (int k = 0; k < 3; ++k) {
+        const aiVector3D& p = part->mVertices[part->mFaces[f].mIndices[k]];
+        corners[std::size_t(k)] = Vec3(p.x, p.y, p.z);
+      }
+      triangles.push_back(corners);
+    }
+  }
+  return positions_of(triangles, topology, path.string());
 }
 
 bool mesh_format_supported(const std::string& format) {

@@ -1,5 +1,7 @@
 #include "drape/core/stats_compare.h"
 
+#include "drape/ccd/input_file.h"
+
 #include <cmath>
 #include <fstream>
 #include <sstream>
@@ -34,8 +36,12 @@ ColumnTolerance default_tolerance() { return {1e-9, 1e-6}; }
 namespace {
 
 std::vector<std::vector<std::string>> read_csv(const std::filesystem::path& path) {
-  std::ifstream in(path);
-  if (!in) throw std::runtime_error(path.string() + ": cannot open the statistics file");
+  std::stringstream in;
+  try {
+    in.str(ccd::read_input_file(path, ccd::MAX_MESH_BYTES, "statistics file"));
+  } catch (const ccd::InputFileError& e) {
+    throw std::runtime_error(e.what());
+  }
   std::vector<std::vector<std::string>> rows;
   std::size_t line_number = 0;
   for (std::string line; std::getline(in, line);) {

@@ -7,6 +7,7 @@
 #include <sstream>
 
 #include "drape/ccd/query_file.h"
+#include "drape/core/grid.h"
 #include "drape/core/mesh.h"
 #include "drape/core/mesh_io.h"
 #include "drape/core/model.h"
@@ -34,6 +35,19 @@ TEST(FuzzRegressions, EveryKeptInputEndsInAResultOrAClearError) {
       const std::string format = (static_cast<unsigned char>(bytes[0]) & 1) ? "ply" : "obj";
       try {
         (void)drape::mesh_problem(drape::parse_mesh(bytes.substr(1), format, entry.path().string()));
+      } catch (const drape::MeshFileError& e) {
+        EXPECT_NE(std::string(e.what()).find(entry.path().string()), std::string::npos) << e.what();
+      }
+      ++replayed;
+    } else if (name.rfind("frame-", 0) == 0) {
+      // As the frame fuzzer reads it: the first byte picks the grid.
+      const std::string bytes = buffer.str();
+      if (bytes.empty()) continue;
+      drape::GridSpec spec;
+      const auto b = static_cast<unsigned char>(bytes[0]);
+      spec.resolution = {1 + b % 4, 1 + (b / 4) % 4};
+      try {
+        (void)drape::parse_frame_positions(bytes.substr(1), entry.path().string(), drape::make_grid(spec).mesh);
       } catch (const drape::MeshFileError& e) {
         EXPECT_NE(std::string(e.what()).find(entry.path().string()), std::string::npos) << e.what();
       }

@@ -34,6 +34,11 @@ TriangleMesh parse_mesh(const std::string& bytes, const std::string& format, con
 
 std::vector<Vec3> load_frame_positions(const std::filesystem::path& path, const TriangleMesh& topology);
 
+/// load_frame_positions on the bytes of an OBJ frame (drape's own reader, double precision:
+/// "v" and "f" lines, polygons as fans, other lines skipped); name stands for the file in
+/// messages ("<name>:<line>: ..."). The frame fuzzer's entry point.
+std::vector<Vec3> parse_frame_positions(const std::string& obj_bytes, const std::string& name, const TriangleMesh& topology);
+
 /// Writes the mesh atomically (a temporary file renamed into place), so a reader never sees a
 /// truncated mesh. format: "obj" (without a material file), "ply", "stl", or any assimp export
 /// format id. Throws MeshFileError.
