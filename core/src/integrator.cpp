@@ -23,11 +23,10 @@ State initial_state(const Model& model) {
 constexpr Scalar RESPONSE_HOLD = 1e8;
 
 // A step may end with at most this fraction of the scene's energy scale (energy_scale) more
-// than it started with, plus the sources' work; beyond it the step is taken again as two half
-// steps, down to MAX_STEP_HALVINGS times. The tolerance covers what the analytic obstacles'
+// than it started with, plus the sources' work; beyond it the step is taken again in 2, 4, ...
+// parts, at most 2^solver.max_halvings. The tolerance covers what the analytic obstacles'
 // projection out of the thickness adds (m g times a step's sag, far below it).
 constexpr Scalar STEP_ENERGY_TOLERANCE = 1e-3;
-constexpr int MAX_STEP_HALVINGS = 6;
 
 struct Integrator::Workspace {
   std::vector<int> free_index;               // vertex -> free vertex index, or -1 if pinned
@@ -289,28 +288,51 @@ StepReport Integrator::advance(State& state) {
   return report;
 }
 
-StepReport Integrator::step(State& state) { return advance_within_energy(state, model_.scene.timestep(), 0); }
-
-StepReport Integrator::advance_within_energy(State& state, Scalar h, int halvings) {
+StepReport Integrator::step(State& state) {
   const Model& m = model_;
+  const Scalar h = m.scene.timestep();
   const State before = state;
   const Scalar energy_before = kinetic_energy(m, state) + potential_energy(m, state);
-  h_ = h;
-  StepReport report = advance(state);
-  if (!report.ok || halvings == MAX_STEP_HALVINGS) return report;
-  const Scalar energy_after = kinetic_energy(m, state) + potential_energy(m, state);
-  if (energy_after <= energy_before + report.external_work + energy_tolerance_) return report;
+  // The step's energy beyond its start and its sources' work, once taken as `parts` equal parts.
+  const auto take = [&](State& s, int parts) {
+    h_ = h / parts;
+    StepReport report = advance(s);
+    for (int k = 1; k < parts && report.ok; ++k) report.add(advance(s));
+    const Scalar excess = kinetic_energy(m, s) + potential_energy(m, s) - energy_before - report.external_work;
+    return std::make_pair(report, excess);
+  };
+  auto [report, excess] = take(state, 1);
   // The step made energy no source put in (an impact whose response the step's size could not
-  // spread: a stopped vertex strains its neighbours' springs in one step): taken again as two
-  // steps of half the size. The rejected step's work stays in the counters.
-  state = before;
-  StepReport halves = advance_within_energy(state, h / 2, halvings + 1);
-  if (halves.ok) halves.add(advance_within_energy(state, h / 2, halvings + 1));
-  halves.step_halvings += 1;
-  halves.solve_ms += report.solve_ms;
-  halves.solver_iterations += report.solver_iterations;
-  halves.collisions.add(report.collisions);
-  return halves;
+  // spread: a stopped vertex strains its neighbours' springs in one step): taken again in 2,
+  // 4, ... parts while that excess keeps falling by half at least (strain from one step's
+  // motion falls with the step's size); the attempt with the least excess is kept, and the
+  // rejected attempts' work stays in the counters.
+  StepReport spent;
+  for (int parts = 2; report.ok && excess > energy_tolerance_ && parts <= (1 << m.scene.solver.max_halvings); parts *= 2) {
+    State again = before;
+    auto [finer, finer_excess] = take(again, parts);
+    if (!finer.ok) {  // keep the coarser result; the finer one's failure is not the step's
+      spent.add(finer);
+      break;
+    }
+    const bool converging = finer_excess <= 0.5 * excess;
+    if (finer_excess < excess) {
+      spent.add(report);
+      report = finer, excess = finer_excess, state = std::move(again);
+      report.step_halvings = 0;
+      ++spent.step_halvings;
+    } else {
+      spent.add(finer);
+    }
+    if (!converging) break;
+  }
+  // Counted once: the halvings of the kept attempt (log2 of its parts) and the work of all.
+  const int halvings = spent.step_halvings;
+  report.solve_ms += spent.solve_ms;
+  report.solver_iterations += spent.solver_iterations;
+  report.collisions.add(spent.collisions);
+  report.step_halvings = halvings;
+  return report;
 }
 
 void StepReport::add(const StepReport& other) {

@@ -40,7 +40,8 @@ struct StepReport {
   /// potential is part of potential_energy. A run's energy stays below its start plus the sum
   /// of these (docs/scenes.md, "limits").
   Scalar external_work = 0;
-  /// Steps taken again as two half steps because they made energy (see Integrator::step).
+  /// How many times the step was halved because it made energy (Integrator::step): its kept
+  /// attempt took 2^step_halvings parts.
   int step_halvings = 0;
   /// Adds another step's report: counts, times and work summed, the first failure kept.
   void add(const StepReport& other);
@@ -61,7 +62,8 @@ class Integrator {
   /// One step of the scene's timestep: forces -> implicit solve -> analytic obstacles ->
   /// collision pipeline (broad phase, narrow phase, response) -> positions -> checks. A step
   /// that ends with more energy than it began with plus its sources' work (beyond a
-  /// tolerance) is taken again as two half steps, up to six halvings deep (1/64 of the step).
+  /// tolerance) is taken again in 2, 4, ... 64 equal parts while that excess keeps falling by
+  /// half at least; the attempt with the least excess is kept.
   StepReport step(State& state);
   const LinearSolver& solver() const { return *solver_; }
   /// The collision pipeline, or nullptr when the scene needs none.
@@ -80,8 +82,6 @@ class Integrator {
                        StepReport& report);
   // One step of size h_, unchecked.
   StepReport advance(State& state);
-  // advance, halving the step where it makes energy (step's contract).
-  StepReport advance_within_energy(State& state, Scalar h, int halvings);
   // The response to contact: analytic obstacles, then the collision pipeline; changes motion
   // and the state's velocities.
   void respond(State& state, std::vector<Vec3>& motion, StepReport& report);

@@ -131,6 +131,9 @@ struct SolverSpec {
   SolverKind kind = SolverKind::Cholmod;
   Scalar tolerance = 1e-8;  ///< cg: relative residual at which it stops
   int max_iterations = 2000;  ///< cg: iteration cap
+  /// A step that makes energy (beyond a tolerance) is taken again in 2, 4, ... parts, at most
+  /// 2^max_halvings (Integrator::step); 0 takes every step as it comes.
+  int max_halvings = 3;
 };
 
 struct CollisionSpec {
