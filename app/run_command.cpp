@@ -145,13 +145,14 @@ int run(const RunArguments& args) {
     std::cerr << "drape run: " << e.what() << "\n";
     return EXIT_BAD_INPUT;
   }
-  progress.summary();
   if (outcome.end != RunEnd::Completed) {
     progress.end_line();
+    progress.summary();
     if (args.render || wants_render) std::cerr << "drape run: not rendering a run that stopped; 'drape render' can\n";
     std::cerr << "drape run: stopped: " << outcome.message << " (in " << settings.out.string() << "/)\n";
     return EXIT_RUN_STOPPED;
   }
+  progress.summary();
   if (!args.quiet)
     std::cerr << "drape run: done: " << outcome.frames_done << " frames; meshes and stats.csv in " << settings.out.string()
               << "/\n";

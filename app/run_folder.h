@@ -42,9 +42,14 @@ inline Scene run_folder_scene(const std::filesystem::path& folder) {
   // A run folder holds copies of its meshes (meshes/) and reads as itself; one written by an
   // earlier drape names the scene it came from in scene_path.txt instead.
   std::filesystem::path origin = copy;
-  if (std::ifstream where{folder / "scene_path.txt"}; where) {
+  if (std::filesystem::exists(folder / "scene_path.txt", error)) {
     std::string line;
-    std::getline(where, line);
+    try {
+      line = ccd::read_input_file(folder / "scene_path.txt", 4096, "scene path file");
+    } catch (const ccd::InputFileError& e) {
+      throw SceneError(e.what());
+    }
+    line = line.substr(0, line.find('\n'));
     if (!line.empty() && std::filesystem::exists(line, error)) origin = line;
   }
   return parse_scene(text, origin);
@@ -104,11 +109,11 @@ inline std::optional<RunFolder> open_run_folder(const std::filesystem::path& fol
   // A run writes frames 0, 1, 2, ... in order and stops at the first it cannot write: a gap
   // means files were lost or mixed in, and checking or rendering around it would mislead.
   std::vector<int> missing;
-  for (int expected = 0, k = 0; k < int(run.frames.size()); ++expected) {
-    if (run.frames[std::size_t(k)].first == expected) ++k;
-    else if (run.frames[std::size_t(k)].first < expected) ++k;  // the same number twice (two formats)
-    else missing.push_back(expected);
+  int expected = 0;
+  for (const auto& [frame, path] : run.frames) {  // sorted; a number twice (two formats) counts once
+    while (expected < frame && missing.size() <= 5) missing.push_back(expected++);
     if (missing.size() > 5) break;
+    if (frame == expected) ++expected;
   }
   if (!missing.empty()) {
     std::string list;

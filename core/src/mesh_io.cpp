@@ -109,7 +109,11 @@ std::string obj_text(const TriangleMesh& mesh) {
 
 // The triangles of an OBJ file as corner positions in double precision, in file order: "v"
 // lines and "f" lines (a polygon as the fan assimp makes of it); other lines are skipped.
-std::vector<std::array<Vec3, 3>> obj_triangles(const std::string& text, const std::string& name) {
+// At most max_triangles are kept (the rest only counted in total, so that a message can say
+// how many the file has without holding them) and max_vertices read.
+std::vector<std::array<Vec3, 3>> obj_triangles(const std::string& text, const std::string& name,
+                                               std::size_t max_triangles, std::size_t max_vertices, std::size_t& total) {
+  total = 0;
   std::vector<Vec3> vertices;
   std::vector<std::array<Vec3, 3>> triangles;
   std::size_t line_number = 0;
@@ -131,6 +135,9 @@ std::vector<std::array<Vec3, 3>> obj_triangles(const std::string& text, const st
       if (next == p) throw MeshFileError(where() + "expected three coordinates after 'v'");
       p = next, z = std::strtod(p, &next);
       if (next == p) throw MeshFileError(where() + "expected three coordinates after 'v'");
+      if (vertices.size() == max_vertices)
+        throw MeshFileError(where() + "more than " + std::to_string(max_vertices) + " vertices for a frame of " +
+                            std::to_string(max_triangles) + " triangles");
       vertices.emplace_back(x, y, z);
     } else if (line.rfind("f ", 0) == 0 || line.rfind("f\t", 0) == 0) {
       std::vector<Vec3> corners;
@@ -150,10 +157,13 @@ std::vector<std::array<Vec3, 3>> obj_triangles(const std::string& text, const st
         const long resolved = index > 0 ? index - 1 : long(vertices.size()) + index;
         if (resolved < 0 || resolved >= long(vertices.size()))
           throw MeshFileError(where() + "vertex index " + number + " refers to no vertex read so far");
+        if (corners.size() == max_triangles + 2)
+          throw MeshFileError(name + ": expected " + std::to_string(max_triangles) + " triangles, found more");
         corners.push_back(vertices[std::size_t(resolved)]);
       }
       if (corners.size() < 3) continue;  // assimp reads these as points and lines
-      for (std::size_t k = 1; k + 1 < corners.size(); ++k) triangles.push_back({corners[0], corners[k], corners[k + 1]});
+      for (std::size_t k = 1; k + 1 < corners.size(); ++k, ++total)
+        if (triangles.size() < max_triangles) triangles.push_back({corners[0], corners[k], corners[k + 1]});
     }
   }
   return triangles;
@@ -178,11 +188,11 @@ TriangleMesh parse_mesh(const std::string& bytes, const std::string& format, con
 namespace {
 
 // The positions of topology's vertices from a file's triangles (corners in file order).
-std::vector<Vec3> positions_of(const std::vector<std::array<Vec3, 3>>& triangles, const TriangleMesh& topology,
-                               const std::string& name) {
-  if (triangles.size() != topology.triangles.size())
+std::vector<Vec3> positions_of(const std::vector<std::array<Vec3, 3>>& triangles, std::size_t total,
+                               const TriangleMesh& topology, const std::string& name) {
+  if (total != topology.triangles.size())
     throw MeshFileError(name + ": expected " + std::to_string(topology.triangles.size()) + " triangles, found " +
-                        std::to_string(triangles.size()));
+                        std::to_string(total));
   std::vector<Vec3> positions(topology.vertices.size(), Vec3::Zero());
   for (std::size_t f = 0; f < triangles.size(); ++f)
     for (int k = 0; k < 3; ++k) positions[std::size_t(topology.triangles[f][k])] = triangles[f][std::size_t(k)];
@@ -194,7 +204,12 @@ std::vector<Vec3> positions_of(const std::vector<std::array<Vec3, 3>>& triangles
 }  // namespace
 
 std::vector<Vec3> parse_frame_positions(const std::string& obj_bytes, const std::string& name, const TriangleMesh& topology) {
-  return positions_of(obj_triangles(obj_bytes, name), topology, name);
+  // A frame's triangles are the topology's; its vertices at most three a triangle (an exporter
+  // may repeat them per face). More is bad input, refused before it can exhaust the memory.
+  const std::size_t triangles = topology.triangles.size();
+  std::size_t total = 0;
+  const auto read = obj_triangles(obj_bytes, name, triangles, 3 * triangles + 1024, total);
+  return positions_of(read, total, topology, name);
 }
 
 std::vector<Vec3> load_frame_positions(const std::filesystem::path& path, const TriangleMesh& topology) {
@@ -227,7 +242,7 @@ std::vector<Vec3> load_frame_positions(const std::filesystem::path& path, const 
       triangles.push_back(corners);
     }
   }
-  return positions_of(triangles, topology, path.string());
+  return positions_of(triangles, triangles.size(), topology, path.string());
 }
 
 bool mesh_format_supported(const std::string& format) {

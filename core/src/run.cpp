@@ -66,10 +66,29 @@ FrameStats measure(const Model& model, const State& state, int frame) {
 }
 
 
-bool is_run_file(const std::filesystem::path& name) {
-  const std::string file = name.filename().string();
-  static const std::regex run_file(R"((frame_\d+\..*|stats\.csv|scene\.json|scene_path\.txt|meshes|render|video\.mp4)(\.partial)?)");
-  return std::regex_match(file, run_file);
+// What drape writes into a run folder, and nothing else: files by name, and the folders
+// meshes/ and render/ only when every entry in them is one drape writes there.
+bool matches(const std::filesystem::path& path, const std::regex& pattern) {
+  return std::regex_match(path.filename().string(), pattern);
+}
+
+bool folder_of_only(const std::filesystem::path& folder, const std::regex& pattern) {
+  std::error_code error;
+  for (std::filesystem::directory_iterator it(folder, error), end; !error && it != end; it.increment(error))
+    if (!matches(it->path(), pattern)) return false;
+  return !error;
+}
+
+bool is_run_file(const std::filesystem::directory_entry& entry) {
+  static const std::regex file(R"((frame_\d+\.[A-Za-z0-9]+|stats\.csv|scene\.json|scene_path\.txt|video\.mp4)(\.partial)?)");
+  static const std::regex mesh_copy(R"((cloth|obstacle)_\d+(\.[A-Za-z0-9]+)?(\.partial)?)");
+  static const std::regex image(R"(frame_\d+\.png(\.partial)?)");
+  std::error_code error;
+  if (!entry.is_directory(error)) return matches(entry.path(), file);
+  const std::string name = entry.path().filename().string();
+  if (name == "meshes") return folder_of_only(entry.path(), mesh_copy);
+  if (name == "render") return folder_of_only(entry.path(), image);
+  return false;
 }
 
 void prepare_run_folder(const std::filesystem::path& out, bool overwrite) {
@@ -80,7 +99,7 @@ void prepare_run_folder(const std::filesystem::path& out, bool overwrite) {
   std::vector<std::filesystem::path> old;
   try {
     for (const auto& entry : std::filesystem::directory_iterator(out))
-      if (is_run_file(entry.path())) old.push_back(entry.path());
+      if (is_run_file(entry)) old.push_back(entry.path());
   } catch (const std::filesystem::filesystem_error& e) {
     throw RunSetupError(out.string() + ": cannot list the output folder: " + e.code().message());
   }
@@ -95,25 +114,29 @@ void prepare_run_folder(const std::filesystem::path& out, bool overwrite) {
   }
 }
 
-void write_run_inputs(const Scene& scene, const std::filesystem::path& out) {
-  // A scene parsed from text (a test, an API user) has no file to copy.
-  std::error_code error;
-  if (scene.file.empty() || !std::filesystem::is_regular_file(scene.file, error)) return;
-  std::string text;
-  try {
-    text = ccd::read_input_file(scene.file, ccd::MAX_SCENE_BYTES, "scene file");
-  } catch (const ccd::InputFileError& e) {
-    throw RunSetupError(e.what());
-  }
-  // The scene as given, with each mesh path pointing at a copy in meshes/: the folder alone
+// The scene copy and its meshes, read before anything in the folder is removed (the scene may
+// be the copy of the run it replaces).
+struct RunInputs {
+  std::string scene;  // the copy's text, mesh paths pointing into meshes/
+  std::vector<std::pair<std::string, std::string>> meshes;  // relative path, bytes
+};
+
+std::optional<RunInputs> read_run_inputs(const Scene& scene) {
+  // A scene parsed from text without a file (a test, an API user) has no copy.
+  if (scene.file.empty() || scene.text.empty()) return std::nullopt;
+  // The scene as it ran, with each mesh path pointing at a copy in meshes/: the folder alone
   // is enough to check and render the run, whatever happens to the original files later.
-  nlohmann::ordered_json root = nlohmann::ordered_json::parse(text);
+  nlohmann::ordered_json root;
+  try {
+    root = nlohmann::ordered_json::parse(scene.text);
+  } catch (const nlohmann::json::exception& e) {
+    throw RunSetupError(scene.file.string() + ": cannot copy the scene: " + e.what());
+  }
+  RunInputs inputs;
   const auto copy_mesh = [&](nlohmann::ordered_json& entry, const std::filesystem::path& source, const std::string& name) {
     const std::string relative = "meshes/" + name + source.extension().string();
-    std::filesystem::create_directories(out / "meshes", error);
-    if (error) throw RunSetupError((out / "meshes").string() + ": cannot create the folder: " + error.message());
     try {
-      write_file_atomically(out / relative, ccd::read_input_file(source, ccd::MAX_MESH_BYTES, "mesh file"));
+      inputs.meshes.emplace_back(relative, ccd::read_input_file(source, ccd::MAX_MESH_BYTES, "mesh file"));
     } catch (const ccd::InputFileError& e) {
       throw RunSetupError(e.what());
     }
@@ -124,27 +147,39 @@ void write_run_inputs(const Scene& scene, const std::filesystem::path& out) {
   for (std::size_t o = 0; o < scene.obstacles.size(); ++o)
     if (scene.obstacles[o].kind == ObstacleSpec::Kind::Mesh)
       copy_mesh(root["obstacles"][o], scene.obstacles[o].mesh_file, "obstacle_" + std::to_string(o));
-  write_file_atomically(out / "scene.json", root.dump(2) + "\n");
+  inputs.scene = root.dump(2) + "\n";
+  return inputs;
+}
+
+void write_run_inputs(const RunInputs& inputs, const std::filesystem::path& out) {
+  if (!inputs.meshes.empty()) {
+    std::error_code error;
+    std::filesystem::create_directories(out / "meshes", error);
+    if (error) throw OutputError((out / "meshes").string() + ": cannot create the folder: " + error.message());
+  }
+  for (const auto& [relative, bytes] : inputs.meshes) write_file_atomically(out / relative, bytes);
+  write_file_atomically(out / "scene.json", inputs.scene);
 }
 
 }  // namespace
 
 RunOutcome run_simulation(const Model& model, const RunSettings& settings, const std::atomic<bool>& interrupt,
                           const std::function<void(const FrameStats&)>& on_frame) {
+  const std::optional<RunInputs> inputs = read_run_inputs(model.scene);
   prepare_run_folder(settings.out, settings.overwrite);
-  try {
-    write_run_inputs(model.scene, settings.out);
-  } catch (const OutputError& e) {
-    throw RunSetupError(e.what());
-  }
-  State state = initial_state(model);
+  // A failed write from here on (a full disk) stops the run: status 3, as during it.
   std::optional<LineFile> stats;
   try {
+    if (inputs) write_run_inputs(*inputs, settings.out);
     stats.emplace(stats_path(settings.out));
     stats->write_line(stats_header());
   } catch (const OutputError& e) {
-    throw RunSetupError(e.what());
+    RunOutcome outcome;
+    outcome.end = RunEnd::Stopped;
+    outcome.message = std::string("cannot write the run's inputs: ") + e.what() + "; no frame is written";
+    return outcome;
   }
+  State state = initial_state(model);
   const std::string& format = model.scene.output.mesh_format;
   // Writes the frame's mesh then its row: a row in stats.csv means its frame is complete.
   const auto write_frame = [&](const State& state, FrameStats row) {

@@ -305,7 +305,8 @@ std::string line_and_column(const std::string& text, std::size_t byte) {
 // Checks what nlohmann's parser lets through and the scene must not hold: nesting deeper
 // than MAX_JSON_DEPTH (a value that deep would overflow the stack of every recursive reader
 // after the parser) and a key given twice in one object (the parser keeps the last one
-// silently). Runs on text the parser accepted, so strings and brackets are well formed.
+// silently). Runs before the parse, so on malformed text it may stop early or miss a key; the
+// parse then reports the syntax error.
 void check_structure(const std::string& text, const std::filesystem::path& file) {
   struct Level {
     bool object;
@@ -329,8 +330,12 @@ void check_structure(const std::string& text, const std::filesystem::path& file)
       while (next < text.size() && std::isspace(static_cast<unsigned char>(text[next]))) ++next;
       const bool is_key = !levels.empty() && levels.back().object && next < text.size() && text[next] == ':';
       if (!is_key) continue;
-      // The key decoded, so that "a" and "\u0061" are the same key.
-      const std::string key = json::parse(text.substr(start, i + 1 - start)).get<std::string>();
+      // The key decoded, so that "a" and "\u0061" are the same key (as written if malformed).
+      std::string key = text.substr(start, std::min(i + 1, text.size()) - start);
+      try {
+        key = json::parse(key).get<std::string>();
+      } catch (const json::exception&) {
+      }
       if (!levels.back().keys.insert(key).second)
         throw SceneError(file.string() + ": " + line_and_column(text, start + 1) + ": the key '" + key +
                          "' appears twice in the same object");
@@ -341,6 +346,9 @@ void check_structure(const std::string& text, const std::filesystem::path& file)
 }  // namespace
 
 Scene parse_scene(const std::string& text, const std::filesystem::path& file) {
+  // Before the parse: a value nested deeper than the limit is refused before a tree of it is
+  // built (16 MiB of '[' would allocate about a gigabyte).
+  check_structure(text, file);
   json root;
   try {
     root = json::parse(text);
@@ -353,12 +361,12 @@ Scene parse_scene(const std::string& text, const std::filesystem::path& file) {
     if (const auto p = reason.find("] "); p != std::string::npos) reason = reason.substr(p + 2);
     throw SceneError(file.string() + ": invalid JSON: " + reason);
   }
-  check_structure(text, file);
   const Node n(root, "", file);
   n.allow({"frame_time", "frame_steps", "timestep", "end_time", "frames", "gravity", "cloths", "handles",
            "obstacles", "wind", "friction", "solver", "collisions", "output", "bounds", "render", "limits"});
   Scene s;
   s.file = file;
+  s.text = text;
   if (n.has("comment")) s.comment = n.at("comment").string();
   if (n.has("frame_time")) s.frame_time = n.at("frame_time").number_in(MIN_FRAME_TIME, MAX_FRAME_TIME, "from 1e-6 to 60 (s)");
   if (n.has("frame_steps") && n.has("timestep")) n.fail("give 'frame_steps' or 'timestep', not both");
@@ -420,7 +428,7 @@ Scene parse_scene(const std::string& text, const std::filesystem::path& file) {
     const Node o = n.at("output");
     o.allow({"folder", "mesh_format", "meshes"});
     if (o.has("folder")) s.output.folder = o.at("folder").string();
-    if (o.has("mesh_format")) s.output.mesh_format = o.at("mesh_format").one_of({"obj", "ply", "plyb", "stl", "stlb", "gltf2", "glb2", "collada"});
+    if (o.has("mesh_format")) s.output.mesh_format = o.at("mesh_format").one_of({"obj", "ply", "plyb", "stl", "stlb", "glb2", "collada"});
     if (o.has("meshes")) s.output.meshes = o.at("meshes").boolean();
   }
   if (s.output.folder.empty()) s.output.folder = std::filesystem::path("out") / file.stem();

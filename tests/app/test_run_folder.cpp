@@ -70,6 +70,29 @@ TEST(RunFolder, AFolderHoldingAnotherRunIsRefusedUnlessOverwrite) {
   EXPECT_EQ(check.status, 0) << check.output;
 }
 
+// --overwrite removes what drape wrote and nothing else: folders named like a run's but
+// holding other files stay, and a run folder can be run again in place from its own copy.
+TEST(RunFolder, OverwriteRemovesOnlyWhatARunWrote) {
+  const fs::path out = temp_dir("not_a_run");
+  fs::create_directories(out / "meshes");
+  fs::create_directories(out / "render");
+  fs::copy_file(SOURCE + "/scenes/meshes/box.obj", out / "meshes/box.obj");
+  std::ofstream(out / "render/notes.txt") << "mine";
+  const Outcome run = run_drape("run " + SOURCE + "/scenes/hanging.json --frames 1 --quiet --overwrite --out " + out.string());
+  ASSERT_EQ(run.status, 0) << run.output;
+  EXPECT_TRUE(fs::exists(out / "meshes/box.obj"));
+  EXPECT_TRUE(fs::exists(out / "render/notes.txt"));
+
+  const fs::path again = temp_dir("in_place");
+  ASSERT_EQ(run_drape("run " + SOURCE + "/scenes/mesh_obstacle.json --frames 1 --quiet --out " + again.string()).status, 0);
+  const Outcome in_place =
+      run_drape("run " + (again / "scene.json").string() + " --frames 2 --quiet --overwrite --out " + again.string());
+  ASSERT_EQ(in_place.status, 0) << in_place.output;
+  EXPECT_TRUE(fs::exists(again / "meshes/obstacle_0.obj"));
+  const Outcome check = run_drape("check " + again.string());
+  EXPECT_EQ(check.status, 0) << check.output;
+}
+
 // check and render read the scene and its meshes from the folder: the original files may move.
 TEST(RunFolder, ARunFolderIsCompleteByItself) {
   const fs::path source = temp_dir("source");
@@ -94,6 +117,8 @@ TEST(RunFolder, CheckAndRenderReportAMissingFrame) {
   const fs::path out = temp_dir("missing");
   ASSERT_EQ(run_drape("run " + SOURCE + "/scenes/hanging.json --frames 3 --quiet --out " + out.string()).status, 0);
   fs::remove(out / "frame_00001.obj");
+  // A frame number twice (another format beside it) hides no gap.
+  fs::copy_file(out / "frame_00000.obj", out / "frame_00000.ply");
   for (const std::string command : {"check " + out.string(), "render --no-video --quiet --resolution 32x32 " + out.string()}) {
     const Outcome outcome = run_drape(command);
     EXPECT_EQ(outcome.status, 2) << command << ": " << outcome.output;

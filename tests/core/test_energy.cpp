@@ -62,13 +62,14 @@ TEST(Energy, TheMeshObstacleSceneInFullStaysWithinItsBound) {
 }
 
 // A tablecloth on a table-like mesh (a top and four legs) at the default 10 steps a frame: it
-// climbed from 4 J to about 2,400 J and crawled up the table (issue 19). Coarser than the
-// shipped scenes/tablecloth.json, and without self-collision, to keep the suite quick; the
-// shipped scene runs in full in bench/penetration_runs.sh.
+// climbed from 4 J to about 2,400 J and crawled up the table (issue 19); at 7152cdc this one
+// still rose from 3.77 J to 8.69 J by frame 44, stretch 1.13. Coarser than the shipped
+// scenes/tablecloth.json, and without self-collision, to keep the suite quick; the shipped
+// scene runs in full in bench/penetration_runs.sh.
 TEST(Energy, ATableclothOnATableMeshStaysWithinItsBound) {
   const Model model = build_model(parse_scene(R"({
     "frames": 45,
-    "cloths": [{"grid": {"size": [1.6, 1.6], "resolution": [20, 20]}, "transform": {"translate": [0, 0, 1.0]}}],
+    "cloths": [{"grid": {"size": [1.6, 1.6], "resolution": [30, 30]}, "transform": {"translate": [0, 0, 1.0]}}],
     "obstacles": [{"mesh": ")" + SOURCE + R"(/scenes/meshes/table.obj"}, {"plane": {}}],
     "friction": 0.4})", "table.json"));
   const Ran ran = run(model, "table");

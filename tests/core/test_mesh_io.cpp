@@ -106,7 +106,6 @@ TEST(MeshIo, NonFiniteVerticesAreNotWelded) {
 TEST(MeshIo, AFrameFarFromTheOriginReadsBackBitForBit) {
   const fs::path dir = fs::temp_directory_path() / ("drape_mesh_io_far_" + std::to_string(::getpid()));
   fs::remove_all(dir);
-  // Parsed from text: the run writes frames and statistics, no scene copy.
   const Model model = build_model(parse_scene(
       R"({"frames": 1, "cloths": [{"grid": {"size": [1, 1], "resolution": [7, 5]},
           "transform": {"translate": [1000000.123456789, -999999.987654321, 1000000.5], "rotate": [17, 1, 2, 3]}}]})",

@@ -62,8 +62,8 @@ class Integrator {
   /// One step of the scene's timestep: forces -> implicit solve -> analytic obstacles ->
   /// collision pipeline (broad phase, narrow phase, response) -> positions -> checks. A step
   /// that ends with more energy than it began with plus its sources' work (beyond a
-  /// tolerance) is taken again in 2, 4, ... 64 equal parts while that excess keeps falling by
-  /// half at least; the attempt with the least excess is kept.
+  /// tolerance) is taken again in 2, 4, ... equal parts, at most 2^solver.max_halvings, while
+  /// that excess keeps falling by half at least; the attempt with the least excess is kept.
   StepReport step(State& state);
   const LinearSolver& solver() const { return *solver_; }
   /// The collision pipeline, or nullptr when the scene needs none.

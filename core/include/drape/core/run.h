@@ -32,7 +32,7 @@ struct FrameStats {
   std::optional<int> penetrations;  ///< intersecting triangle pairs by the independent check, when enabled
   Scalar external_work = 0;    ///< J, summed since the start: the sources' work (StepReport::external_work)
   Scalar energy_excess = 0;    ///< J: kinetic plus potential energy less (its start plus external_work)
-  int step_halvings = 0;       ///< steps taken again as two half steps (Integrator::step)
+  int step_halvings = 0;       ///< summed StepReport::step_halvings: log2 of the parts each step's kept attempt took
   int warnings = 0;            ///< limits passed this frame: energy, stretch (0 to 2)
   std::vector<std::string> messages;  ///< what each warning says, for the terminal (not a column)
 };

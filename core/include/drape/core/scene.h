@@ -169,6 +169,7 @@ struct RunLimits {
 
 struct Scene {
   std::filesystem::path file;  ///< the scene file, when read from one
+  std::string text;            ///< the JSON as read (a run folder's copy is made from it)
   std::string comment;
   Scalar frame_time = 1.0 / 30;  ///< s
   int frame_steps = 10;          ///< implicit steps per frame
