@@ -97,15 +97,7 @@ Integrator::Integrator(const Model& model, std::unique_ptr<LinearSolver> solver,
 }
 
 Scalar energy_scale(const Model& model) {
-  // The extent of everything at the start: cloths, spheres, mesh obstacles (planes have none).
-  Vec3 lo = model.initial_positions.front(), hi = lo;
-  const auto include = [&](const Vec3& p) { lo = lo.cwiseMin(p), hi = hi.cwiseMax(p); };
-  for (const Vec3& p : model.initial_positions) include(p);
-  for (const Obstacle& o : model.obstacles) {
-    if (o.spec.kind == ObstacleSpec::Kind::Sphere)
-      include(o.spec.center - Vec3::Constant(o.spec.radius)), include(o.spec.center + Vec3::Constant(o.spec.radius));
-    for (const Vec3& p : o.mesh.vertices) include(p);
-  }
+  const Box extent = initial_extent(model);
   Scalar mass = 0, kinetic = 0;
   for (std::size_t v = 0; v < model.masses.size(); ++v) {
     mass += model.masses[v];
@@ -113,7 +105,7 @@ Scalar energy_scale(const Model& model) {
   }
   // Without gravity or motion, what a speed of 1 cm/s would give: a floor, so that a scale is
   // never zero.
-  return std::max(kinetic + mass * model.scene.gravity.norm() * (hi - lo).norm(), 0.5 * mass * 1e-4);
+  return std::max(kinetic + mass * model.scene.gravity.norm() * (extent.max - extent.min).norm(), 0.5 * mass * 1e-4);
 }
 
 Integrator::~Integrator() = default;
@@ -291,6 +283,10 @@ StepReport Integrator::advance(State& state) {
 StepReport Integrator::step(State& state) {
   const Model& m = model_;
   const Scalar h = m.scene.timestep();
+  if (m.scene.solver.max_halvings == 0) {  // a scene pays only for what it asks for
+    h_ = h;
+    return advance(state);
+  }
   const State before = state;
   const Scalar energy_before = kinetic_energy(m, state) + potential_energy(m, state);
   // The step's energy beyond its start and its sources' work, once taken as `parts` equal parts.
@@ -378,10 +374,10 @@ void Integrator::respond(State& state, std::vector<Vec3>& motion, StepReport& re
   for (std::size_t v = 0; v < motion.size(); ++v) state.velocities[v] += motion[v] - before[v];
 }
 
-bool Integrator::solve(StepReport& report, const std::string& failure) {
+bool Integrator::solve(StepReport& report, const std::string& failure, const VectorX* again) {
   Workspace& w = *work_;
   const auto begin = std::chrono::steady_clock::now();
-  const SolveReport solved = solver_->solve(w.matrix, w.rhs, w.solution);
+  const SolveReport solved = again ? solver_->solve_again(*again, w.solution) : solver_->solve(w.matrix, w.rhs, w.solution);
   report.solve_ms += std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - begin).count();
   report.solver_iterations += solved.iterations;
   report.solver_converged = report.solver_converged && solved.converged;
@@ -417,16 +413,7 @@ bool Integrator::spread_response(const std::vector<Vec3>& solved, std::vector<Ve
     const int a = w.free_index[v];
     if (a >= 0) motion[v] = solved[v] + Vec3(w.solution.segment<3>(3 * a));
   }
-  const auto begin = std::chrono::steady_clock::now();
-  const SolveReport again = solver_->solve_again(velocity_rhs, w.solution);
-  report.solve_ms += std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - begin).count();
-  report.solver_iterations += again.iterations;
-  report.solver_converged = report.solver_converged && again.converged;
-  if (!again.ok) {
-    report.ok = false;
-    report.failure = "the linear solver failed spreading the collision response: " + again.error;
-    return true;
-  }
+  if (!solve(report, "the linear solver failed spreading the collision response: ", &velocity_rhs)) return true;
   for (int v = 0; v < n; ++v) {
     const int a = w.free_index[v];
     if (a >= 0) velocities[v] = solved[v] + Vec3(w.solution.segment<3>(3 * a));

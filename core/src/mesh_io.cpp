@@ -35,6 +35,13 @@ bool looks_like_ply(std::string_view head) {
   return true;
 }
 
+// The file's extension in lower case (".PLY" -> ".ply").
+std::string lower_extension(const std::filesystem::path& path) {
+  std::string extension = path.extension().string();
+  for (char& c : extension) c = char(std::tolower(static_cast<unsigned char>(c)));
+  return extension;
+}
+
 // importer.ReadFile, but a PLY file is read once, checked (assimp 5.2 hangs or aborts on some
 // malformed PLY files: ply_check.h) and handed to assimp from memory.
 const aiScene* read_file(Assimp::Importer& importer, const std::filesystem::path& path, unsigned flags) {
@@ -46,9 +53,7 @@ const aiScene* read_file(Assimp::Importer& importer, const std::filesystem::path
   std::ifstream in(path, std::ios::binary);
   char magic[3] = {};
   in.read(magic, 3);
-  std::string extension = path.extension().string();
-  for (char& c : extension) c = char(std::tolower(static_cast<unsigned char>(c)));
-  if (extension != ".ply" && !looks_like_ply(std::string_view(magic, std::size_t(in.gcount()))))
+  if (lower_extension(path) != ".ply" && !looks_like_ply(std::string_view(magic, std::size_t(in.gcount()))))
     return importer.ReadFile(path.string(), flags);
   in.clear();
   in.seekg(0);
@@ -215,9 +220,7 @@ std::vector<Vec3> parse_frame_positions(const std::string& obj_bytes, const std:
 std::vector<Vec3> load_frame_positions(const std::filesystem::path& path, const TriangleMesh& topology) {
   // An OBJ is read by drape itself in double precision (assimp reads single precision), any
   // other format through assimp.
-  std::string extension = path.extension().string();
-  for (char& c : extension) c = char(std::tolower(static_cast<unsigned char>(c)));
-  if (extension == ".obj") {
+  if (lower_extension(path) == ".obj") {
     std::string bytes;
     try {
       bytes = ccd::read_input_file(path, ccd::MAX_MESH_BYTES, "mesh file");

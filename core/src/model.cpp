@@ -217,17 +217,23 @@ Model build_model(const Scene& scene) {
       }
     }
   } else {
-    Vec3 lo = model.initial_positions[0], hi = lo;
-    const auto include = [&](const Vec3& p) { lo = lo.cwiseMin(p), hi = hi.cwiseMax(p); };
-    for (const Vec3& p : model.initial_positions) include(p);
-    for (const Obstacle& o : model.obstacles) {
-      if (o.spec.kind == ObstacleSpec::Kind::Sphere) include(o.spec.center - Vec3::Constant(o.spec.radius)), include(o.spec.center + Vec3::Constant(o.spec.radius));
-      for (const Vec3& p : o.mesh.vertices) include(p);
-    }
-    const Scalar grow = 100 * std::max<Scalar>((hi - lo).norm(), 1e-3);
-    model.bounds = Box{lo - Vec3::Constant(grow), hi + Vec3::Constant(grow)};
+    const Box extent = initial_extent(model);
+    const Scalar grow = 100 * std::max<Scalar>((extent.max - extent.min).norm(), 1e-3);
+    model.bounds = Box{extent.min - Vec3::Constant(grow), extent.max + Vec3::Constant(grow)};
   }
   return model;
+}
+
+Box initial_extent(const Model& model) {
+  Box box{model.initial_positions.front(), model.initial_positions.front()};
+  const auto include = [&](const Vec3& p) { box.min = box.min.cwiseMin(p), box.max = box.max.cwiseMax(p); };
+  for (const Vec3& p : model.initial_positions) include(p);
+  for (const Obstacle& o : model.obstacles) {
+    if (o.spec.kind == ObstacleSpec::Kind::Sphere)
+      include(o.spec.center - Vec3::Constant(o.spec.radius)), include(o.spec.center + Vec3::Constant(o.spec.radius));
+    for (const Vec3& p : o.mesh.vertices) include(p);
+  }
+  return box;
 }
 
 }  // namespace drape

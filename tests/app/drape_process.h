@@ -15,8 +15,9 @@ struct Outcome {
   std::string output;  // stdout and stderr together
 };
 
-inline Outcome run_drape(const std::string& arguments) {
-  const std::string command = std::string(DRAPE_EXECUTABLE) + " " + arguments + " 2>&1";
+/// A shell command line (sh -c), its stdout and stderr together.
+inline Outcome run_shell(const std::string& command_line) {
+  const std::string command = command_line + " 2>&1";
   Outcome run;
   FILE* pipe = popen(command.c_str(), "r");
   std::array<char, 4096> buffer{};
@@ -25,6 +26,8 @@ inline Outcome run_drape(const std::string& arguments) {
   run.status = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
   return run;
 }
+
+inline Outcome run_drape(const std::string& arguments) { return run_shell(std::string(DRAPE_EXECUTABLE) + " " + arguments); }
 
 /// A fresh path name under the system's temporary folder, unique to this test process
 /// (suite names the test file); its parent exists, the path itself does not.

@@ -187,7 +187,7 @@ TEST(BadInput, DevicesAndSymlinkLoopsAreRefusedWithAMessage) {
   fs::create_symlink("loop_b.obj", dir / "loop_a.obj");
   fs::create_symlink("loop_a.obj", dir / "loop_b.obj");
   std::ofstream(dir / "scene.json") << R"({"frames": 1, "cloths": [{"mesh": "loop_a.obj"}]})";
-  for (const std::string command : {"validate", "run"}) {
+  for (const std::string& command : {std::string("validate"), std::string("run")}) {
     const Outcome run = run_drape(command + " " + (dir / "scene.json").string() + (command == "run" ? " --quiet" : ""));
     EXPECT_EQ(run.status, 2) << command << ": " << run.output;
     EXPECT_NE(run.output.find("/cloths/0/mesh: " + (dir / "loop_a.obj").string() + ": cannot read the mesh file: Too many levels of symbolic links"),

@@ -12,6 +12,7 @@
 
 using drape::testing::Outcome;
 using drape::testing::run_drape;
+using drape::testing::run_shell;
 namespace fs = std::filesystem;
 
 namespace {
@@ -33,17 +34,6 @@ std::vector<std::string> frame_files(const fs::path& folder) {
     if (entry.path().filename().string().rfind("frame_", 0) == 0) names.push_back(entry.path().filename().string());
   std::sort(names.begin(), names.end());
   return names;
-}
-
-// The shell's status of a command line (a signal counts as -1).
-Outcome run_shell(const std::string& command) {
-  Outcome run;
-  FILE* pipe = popen((command + " 2>&1").c_str(), "r");
-  char buffer[4096];
-  while (std::size_t n = fread(buffer, 1, sizeof buffer, pipe)) run.output.append(buffer, n);
-  const int status = pclose(pipe);
-  run.status = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-  return run;
 }
 
 }  // namespace
@@ -119,7 +109,7 @@ TEST(RunFolder, CheckAndRenderReportAMissingFrame) {
   fs::remove(out / "frame_00001.obj");
   // A frame number twice (another format beside it) hides no gap.
   fs::copy_file(out / "frame_00000.obj", out / "frame_00000.ply");
-  for (const std::string command : {"check " + out.string(), "render --no-video --quiet --resolution 32x32 " + out.string()}) {
+  for (const std::string& command : {"check " + out.string(), "render --no-video --quiet --resolution 32x32 " + out.string()}) {
     const Outcome outcome = run_drape(command);
     EXPECT_EQ(outcome.status, 2) << command << ": " << outcome.output;
     EXPECT_NE(outcome.output.find(out.string() + ": frame 1 missing (the folder has frames up to 3)"), std::string::npos)

@@ -73,7 +73,8 @@ class Integrator {
   struct Workspace;
   // The step's system (the workspace's matrix and right-hand side) solved into its solution;
   // time and iterations added to report, and on failure report says so (failure, then why).
-  bool solve(StepReport& report, const std::string& failure);
+  // With again, solves for that right-hand side with the last solve's matrix instead.
+  bool solve(StepReport& report, const std::string& failure, const VectorX* again = nullptr);
   // The collision response (motion and velocities less solved, on the contact vertices)
   // spread through this step's system: solved again with those vertices held to their new
   // motion, then (the same factorisation) to their new velocities; motion and velocities

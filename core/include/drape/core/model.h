@@ -64,4 +64,8 @@ struct Model {
 /// naming a vertex or corner the cloth does not have, an empty handle box).
 Model build_model(const Scene& scene);
 
+/// The box around everything at the start: the cloths' initial positions, spheres and mesh
+/// obstacles (planes have no extent).
+Box initial_extent(const Model& model);
+
 }  // namespace drape
