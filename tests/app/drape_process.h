@@ -6,7 +6,9 @@
 #include <array>
 #include <cstdio>
 #include <filesystem>
+#include <fstream>
 #include <string>
+#include <vector>
 
 namespace drape::testing {
 
@@ -28,6 +30,14 @@ inline Outcome run_shell(const std::string& command_line) {
 }
 
 inline Outcome run_drape(const std::string& arguments) { return run_shell(std::string(DRAPE_EXECUTABLE) + " " + arguments); }
+
+/// The file's lines, without their line ends.
+inline std::vector<std::string> lines(const std::filesystem::path& path) {
+  std::ifstream in(path);
+  std::vector<std::string> out;
+  for (std::string line; std::getline(in, line);) out.push_back(line);
+  return out;
+}
 
 /// A fresh path name under the system's temporary folder, unique to this test process
 /// (suite names the test file); its parent exists, the path itself does not.

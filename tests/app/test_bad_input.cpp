@@ -13,6 +13,7 @@
 #include "drape_process.h"
 
 using drape::testing::Outcome;
+using drape::testing::lines;
 using drape::testing::run_drape;
 namespace fs = std::filesystem;
 
@@ -27,13 +28,6 @@ fs::path hanging_run(const std::string& name) {
   const fs::path out = temp_dir(name);
   const Outcome run = run_drape("run " + SOURCE + "/scenes/hanging.json --frames 1 --out " + out.string() + " --quiet");
   EXPECT_EQ(run.status, 0) << run.output;
-  return out;
-}
-
-std::vector<std::string> lines(const fs::path& path) {
-  std::ifstream in(path);
-  std::vector<std::string> out;
-  for (std::string line; std::getline(in, line);) out.push_back(line);
   return out;
 }
 

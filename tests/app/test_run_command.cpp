@@ -14,6 +14,7 @@
 
 #include "drape_process.h"
 
+using drape::testing::lines;
 using drape::testing::run_drape;
 using drape::testing::Outcome;
 namespace fs = std::filesystem;
@@ -23,13 +24,6 @@ namespace {
 const std::string SOURCE = DRAPE_SOURCE_DIR;
 
 fs::path temp_dir(const std::string& name) { return drape::testing::fresh_temp_path("run_test", name); }
-
-std::vector<std::string> lines(const fs::path& path) {
-  std::ifstream in(path);
-  std::vector<std::string> out;
-  for (std::string line; std::getline(in, line);) out.push_back(line);
-  return out;
-}
 
 fs::path write_scene(const std::string& name, const std::string& text) {
   const fs::path path = temp_dir(name + ".json");

@@ -11,6 +11,7 @@
 #include "drape_process.h"
 
 using drape::testing::Outcome;
+using drape::testing::lines;
 using drape::testing::run_drape;
 using drape::testing::run_shell;
 namespace fs = std::filesystem;
@@ -20,13 +21,6 @@ namespace {
 const std::string SOURCE = DRAPE_SOURCE_DIR;
 
 fs::path temp_dir(const std::string& name) { return drape::testing::fresh_temp_path("run_folder", name); }
-
-std::vector<std::string> lines(const fs::path& path) {
-  std::ifstream in(path);
-  std::vector<std::string> out;
-  for (std::string line; std::getline(in, line);) out.push_back(line);
-  return out;
-}
 
 std::vector<std::string> frame_files(const fs::path& folder) {
   std::vector<std::string> names;
