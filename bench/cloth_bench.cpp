@@ -41,7 +41,7 @@ std::string scene_json(int cells, const char* solver) {
 Measurement measure_here(int cells, const char* solver, int steps) {
   const Model model = build_model(parse_scene(scene_json(cells, solver), "bench.json"));
   State state = initial_state(model);
-  Integrator integrator(model, make_linear_solver(model.scene.solver));
+  Integrator integrator(model);
   integrator.step(state);
   std::vector<double> total, solve;
   double iterations = 0;

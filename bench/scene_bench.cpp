@@ -206,7 +206,7 @@ int main(int argc, char** argv) {
   }
   if (frames <= 0) frames = model.scene.frames;
   State state = initial_state(model);
-  Integrator integrator(model, make_linear_solver(model.scene.solver), threads);
+  Integrator integrator(model, threads);
   if (!integrator.collisions()) {
     std::fprintf(stderr, "scene_bench: %s has no collision pipeline (no self-collision, no mesh obstacle)\n",
                  scene_path.c_str());

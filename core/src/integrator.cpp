@@ -4,6 +4,7 @@
 #include <chrono>
 
 #include "drape/core/obstacle.h"
+#include "projective.h"
 
 namespace drape {
 
@@ -39,6 +40,9 @@ struct Integrator::Workspace {
   std::vector<SpringBlocks> spring_blocks;
   VectorX rhs, solution;
   std::vector<Vec3> forces;
+  // The projective step's start velocities and explicit forces (gravity, wind), kept for the
+  // response's spread.
+  std::vector<Vec3> start_velocities, explicit_forces;
 
   std::array<int, 3> block(int a, int b) const {
     std::array<int, 3> offsets{};
@@ -57,8 +61,7 @@ struct Integrator::Workspace {
   }
 };
 
-Integrator::Integrator(const Model& model, std::unique_ptr<LinearSolver> solver, int threads)
-    : model_(model), solver_(std::move(solver)), work_(std::make_unique<Workspace>()) {
+Integrator::Integrator(const Model& model, int threads) : model_(model), work_(std::make_unique<Workspace>()) {
   if (CollisionPipeline::needed(model)) {
     CollisionSettings settings;
     settings.threads = threads;
@@ -71,6 +74,12 @@ Integrator::Integrator(const Model& model, std::unique_ptr<LinearSolver> solver,
   w.free_index.assign(n, -1);
   for (int v = 0; v < n; ++v)
     if (model.pin_of_vertex[v] < 0) w.free_index[v] = w.free_count++;
+  energy_tolerance_ = STEP_ENERGY_TOLERANCE * energy_scale(model);
+  if (model.scene.solver.kind == SolverKind::Projective) {  // a scene pays only for what it asks for
+    projective_ = std::make_unique<ProjectiveSolver>(model, w.free_index, w.free_count);
+    return;
+  }
+  solver_ = make_linear_solver(model.scene.solver);
   std::vector<Eigen::Triplet<Scalar>> pattern;
   const auto add_pattern = [&](int a, int b) {
     for (int r = 0; r < 3; ++r)
@@ -93,8 +102,9 @@ Integrator::Integrator(const Model& model, std::unique_ptr<LinearSolver> solver,
   }
   w.rhs.setZero(3 * w.free_count);
   w.solution.setZero(3 * w.free_count);
-  energy_tolerance_ = STEP_ENERGY_TOLERANCE * energy_scale(model);
 }
+
+int Integrator::analyses() const { return projective_ ? projective_->analyses() : solver_->analyses(); }
 
 Scalar energy_scale(const Model& model) {
   const Box extent = initial_extent(model);
@@ -181,8 +191,7 @@ StepReport Integrator::advance(State& state) {
     pinned_dv[pin.vertex] = (target - state.positions[pin.vertex]) / h - state.velocities[pin.vertex];
   }
 
-  // Forces and the system matrix A = M - h dF/dv - h^2 dF/dx over the free vertices, and
-  // the right-hand side h (F + h dF/dx v) less A's coupling to the prescribed dv.
+  // The forces the scene applies: gravity, the air's damping, the wind.
   w.forces.assign(n, Vec3::Zero());
   const Vec3 air_velocity = m.scene.wind ? m.scene.wind->velocity : Vec3::Zero();
   for (int v = 0; v < n; ++v)
@@ -194,6 +203,62 @@ StepReport Integrator::advance(State& state) {
     air_forces = w.forces;
     for (int v = 0; v < n; ++v) air_forces[v] -= m.masses[v] * m.scene.gravity;
   }
+  if (!(projective_ ? solve_projective(state, pinned_dv, report) : solve_linearised(state, pinned_dv, report)))
+    return report;
+  report.external_work = source_work(pinned_dv, air_forces, state.velocities);
+  const bool obstacles_move = std::any_of(m.obstacles.begin(), m.obstacles.end(),
+                                          [](const Obstacle& o) { return o.spec.motion.moves(); });
+  const Scalar kinetic_before_response = obstacles_move ? kinetic_energy(m, state) : 0;
+  // The response: analytic obstacles, then the collision pipeline. Each changes the motion of
+  // the step (what positions advance by) and the velocities alike, but for the analytic
+  // obstacles' projection out of the thickness, which is motion only.
+  std::vector<Vec3> motion = state.velocities;
+  const std::vector<Vec3> solved = motion;
+  respond(state, motion, report);
+  // The response changes only the contact vertices; their neighbours keep the velocities the
+  // solve gave them for a different motion of those vertices, and against stiff springs that
+  // mismatch becomes strain (on a mesh obstacle's rim, or where a cloth lands on the ground,
+  // energy grew). So the change is spread through the implicit system: solved again with the
+  // contact vertices held (a penalty) to their new motion and velocity, then the response runs
+  // once more on the result. Motion and velocity are spread apart: an analytic obstacle's
+  // projection out of the thickness moves its vertex without giving it speed, and spread into
+  // the neighbours' velocities it became energy (drape_sphere's landing: 4.5 J to 11.7 J).
+  if (projective_ ? spread_projective(state.positions, solved, motion, state.velocities, report)
+                  : spread_response(solved, motion, state.velocities, report)) {
+    if (!report.ok) return report;
+    const int first_contacts = report.obstacle_contacts;
+    respond(state, motion, report);
+    report.obstacle_contacts = first_contacts;
+  }
+  if (obstacles_move) report.external_work += std::max<Scalar>(0, kinetic_energy(m, state) - kinetic_before_response);
+  for (int v = 0; v < n; ++v) state.positions[v] += h * motion[v];
+  state.time = t_next;
+  ++state.steps;
+
+  // Checks: numbers and bounds.
+  for (int v = 0; v < n; ++v) {
+    if (!state.positions[v].allFinite() || !state.velocities[v].allFinite()) {
+      report.ok = false;
+      report.failure = "vertex " + std::to_string(v) + " has a NaN or infinite position or velocity";
+      return report;
+    }
+    if (!m.bounds.contains(state.positions[v])) {
+      report.ok = false;
+      report.failure = "the cloth exploded: vertex " + std::to_string(v) + " left the scene bounds";
+      return report;
+    }
+  }
+  return report;
+}
+
+bool Integrator::solve_linearised(State& state, const std::vector<Vec3>& pinned_dv, StepReport& report) {
+  const Model& m = model_;
+  Workspace& w = *work_;
+  const Scalar h = h_;
+  const int n = int(m.vertex_count());
+  // The system matrix A = M - h dF/dv - h^2 dF/dx over the free vertices, and the right-hand
+  // side h (F + h dF/dx v) less A's coupling to the prescribed dv; spring forces join the
+  // workspace's.
   std::fill(w.matrix.valuePtr(), w.matrix.valuePtr() + w.matrix.nonZeros(), 0.0);
   for (int v = 0; v < n; ++v)
     if (w.free_index[v] >= 0)  // M - h d(air drag)/dv
@@ -228,56 +293,56 @@ StepReport Integrator::advance(State& state) {
   }
 
   // The implicit solve.
-  if (!solve(report, "the linear solver failed: ")) return report;
+  if (!solve(report, "the linear solver failed: ")) return false;
 
   // Velocities; the motion of the step starts as the same velocities.
   for (int v = 0; v < n; ++v) {
     const int a = w.free_index[v];
     state.velocities[v] += a >= 0 ? Vec3(w.solution.segment<3>(3 * a)) : pinned_dv[v];
   }
-  report.external_work = source_work(pinned_dv, air_forces, state.velocities);
-  const bool obstacles_move = std::any_of(m.obstacles.begin(), m.obstacles.end(),
-                                          [](const Obstacle& o) { return o.spec.motion.moves(); });
-  const Scalar kinetic_before_response = obstacles_move ? kinetic_energy(m, state) : 0;
-  // The response: analytic obstacles, then the collision pipeline. Each changes the motion of
-  // the step (what positions advance by) and the velocities alike, but for the analytic
-  // obstacles' projection out of the thickness, which is motion only.
-  std::vector<Vec3> motion = state.velocities;
-  const std::vector<Vec3> solved = motion;
-  respond(state, motion, report);
-  // The response changes only the contact vertices; their neighbours keep the velocities the
-  // solve gave them for a different motion of those vertices, and against stiff springs that
-  // mismatch becomes strain (on a mesh obstacle's rim, or where a cloth lands on the ground,
-  // energy grew). So the change is spread through the implicit system: solved again with the
-  // contact vertices held (a penalty) to their new motion and velocity, then the response runs
-  // once more on the result. Motion and velocity are spread apart: an analytic obstacle's
-  // projection out of the thickness moves its vertex without giving it speed, and spread into
-  // the neighbours' velocities it became energy (drape_sphere's landing: 4.5 J to 11.7 J).
-  if (spread_response(solved, motion, state.velocities, report)) {
-    if (!report.ok) return report;
-    const int first_contacts = report.obstacle_contacts;
-    respond(state, motion, report);
-    report.obstacle_contacts = first_contacts;
-  }
-  if (obstacles_move) report.external_work += std::max<Scalar>(0, kinetic_energy(m, state) - kinetic_before_response);
-  for (int v = 0; v < n; ++v) state.positions[v] += h * motion[v];
-  state.time = t_next;
-  ++state.steps;
+  return true;
+}
 
-  // Checks: numbers and bounds.
-  for (int v = 0; v < n; ++v) {
-    if (!state.positions[v].allFinite() || !state.velocities[v].allFinite()) {
-      report.ok = false;
-      report.failure = "vertex " + std::to_string(v) + " has a NaN or infinite position or velocity";
-      return report;
+bool Integrator::solve_projective(State& state, const std::vector<Vec3>& pinned_dv, StepReport& report) {
+  const Model& m = model_;
+  Workspace& w = *work_;
+  const Scalar h = h_;
+  const std::size_t n = m.vertex_count();
+  // The explicit forces: gravity and the wind's drag; the air's damping is in the system.
+  const Vec3 air_velocity = m.scene.wind ? m.scene.wind->velocity : Vec3::Zero();
+  w.explicit_forces = w.forces;
+  for (std::size_t v = 0; v < n; ++v)
+    w.explicit_forces[v] += m.air_damping[v] * m.masses[v] * (state.velocities[v] - air_velocity);
+  w.start_velocities = state.velocities;
+  // The springs' forces at the step's start on the pinned vertices, for the ledger (source_work).
+  if (!m.pins.empty())
+    for (const Spring& s : m.springs) {
+      if (m.pin_of_vertex[std::size_t(s.i)] < 0 && m.pin_of_vertex[std::size_t(s.j)] < 0) continue;
+      const SpringEvaluation e = evaluate_spring(state.positions[s.i], state.positions[s.j], state.velocities[s.i],
+                                                 state.velocities[s.j], s.rest_length, s.stiffness, s.damping);
+      w.forces[s.i] += e.force;
+      w.forces[s.j] -= e.force;
     }
-    if (!m.bounds.contains(state.positions[v])) {
-      report.ok = false;
-      report.failure = "the cloth exploded: vertex " + std::to_string(v) + " left the scene bounds";
-      return report;
-    }
+  // First guess: the inertial prediction y (the free vertices), the prescribed end (the pinned
+  // ones); in free fall it is the answer, which the acceleration then keeps.
+  std::vector<Vec3> positions(n);
+  for (std::size_t v = 0; v < n; ++v)
+    positions[v] = state.positions[v] + h * (state.velocities[v] + pinned_dv[v]) +
+                   (w.free_index[v] >= 0 ? Vec3(h * h / m.masses[v] * w.explicit_forces[v]) : Vec3::Zero());
+  const auto begin = std::chrono::steady_clock::now();
+  std::string error;
+  const bool ok = projective_->solve({h, &state.positions, &w.start_velocities, &w.explicit_forces}, positions, error);
+  report.solve_ms += std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - begin).count();
+  report.solver_iterations += m.scene.solver.iterations;
+  if (!ok) {
+    report.ok = false;
+    report.failure = "the projective solver failed: " + error;
+    return false;
   }
-  return report;
+  for (std::size_t v = 0; v < n; ++v)
+    state.velocities[v] = w.free_index[v] >= 0 ? Vec3((positions[v] - state.positions[v]) / h)
+                                               : Vec3(state.velocities[v] + pinned_dv[v]);
+  return true;
 }
 
 StepReport Integrator::step(State& state) {
@@ -418,6 +483,42 @@ bool Integrator::spread_response(const std::vector<Vec3>& solved, std::vector<Ve
     const int a = w.free_index[v];
     if (a >= 0) velocities[v] = solved[v] + Vec3(w.solution.segment<3>(3 * a));
   }
+  return true;
+}
+
+bool Integrator::spread_projective(const std::vector<Vec3>& start, const std::vector<Vec3>& solved,
+                                   std::vector<Vec3>& motion, std::vector<Vec3>& velocities, StepReport& report) {
+  const Model& m = model_;
+  const Workspace& w = *work_;
+  const Scalar h = h_;
+  const std::size_t n = m.vertex_count();
+  HeldVertices held;
+  for (std::size_t v = 0; v < n; ++v)
+    if (w.free_index[v] >= 0 && (motion[v] != solved[v] || velocities[v] != solved[v])) held.vertices.push_back(int(v));
+  if (held.vertices.empty()) return false;
+  // The same step (its start, velocities and forces as the first solve had them), from the
+  // responded positions, with the contact vertices held; once for each of motion and velocity.
+  const auto spread = [&](std::vector<Vec3>& result) {
+    std::vector<Vec3> positions(n);
+    for (std::size_t v = 0; v < n; ++v) positions[v] = start[v] + h * result[v];
+    held.targets.clear();
+    for (int v : held.vertices) held.targets.push_back(positions[std::size_t(v)]);
+    const auto begin = std::chrono::steady_clock::now();
+    std::string error;
+    const bool ok = projective_->solve({h, &start, &w.start_velocities, &w.explicit_forces}, positions, error,
+                                       &held, RESPONSE_HOLD);
+    report.solve_ms += std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - begin).count();
+    report.solver_iterations += m.scene.solver.iterations;
+    if (!ok) {
+      report.ok = false;
+      report.failure = "the projective solver failed spreading the collision response: " + error;
+      return false;
+    }
+    for (std::size_t v = 0; v < n; ++v)
+      if (w.free_index[v] >= 0) result[v] = (positions[v] - start[v]) / h;
+    return true;
+  };
+  if (spread(motion)) spread(velocities);
   return true;
 }
 

@@ -14,21 +14,9 @@ constexpr Eigen::Index SUPERNODAL_MIN_ROWS = 15000;
 
 class CholmodSolver final : public LinearSolver {
  public:
-  CholmodSolver() {
-    // CHOLMOD parallelises parts of its work with OpenMP; one thread keeps runs bit-for-bit
-    // reproducible and leaves the cores to the collision pipeline.
-    omp_set_num_threads(1);
-  }
   SolveReport solve(const SparseMatrix& A, const VectorX& b, VectorX& x) override {
     SolveReport report;
-    if (!same_pattern(A)) {
-      llt_.setMode(A.rows() < SUPERNODAL_MIN_ROWS ? Eigen::CholmodSimplicialLLt : Eigen::CholmodSupernodalLLt);
-      llt_.analyzePattern(A);
-      ++analyses_;
-      remember_pattern(A);
-    }
-    llt_.factorize(A);
-    if (llt_.info() != Eigen::Success) {
+    if (!factor_.factorise(A)) {
       report.ok = false;
       report.error = "CHOLMOD could not factorise the system matrix (not positive definite)";
       return report;
@@ -37,32 +25,17 @@ class CholmodSolver final : public LinearSolver {
   }
   SolveReport solve_again(const VectorX& b, VectorX& x) override {
     SolveReport report;
-    x = llt_.solve(b);
     report.iterations = 1;
-    if (llt_.info() != Eigen::Success || !x.allFinite()) {
+    if (!factor_.solve(b, x)) {
       report.ok = false;
       report.error = "CHOLMOD's solve failed";
     }
     return report;
   }
-  int analyses() const override { return analyses_; }
+  int analyses() const override { return factor_.analyses(); }
 
  private:
-  bool same_pattern(const SparseMatrix& A) const {
-    return analyses_ > 0 && A.rows() == rows_ && A.nonZeros() == nonzeros_ &&
-           std::equal(A.outerIndexPtr(), A.outerIndexPtr() + A.outerSize() + 1, outer_.begin()) &&
-           std::equal(A.innerIndexPtr(), A.innerIndexPtr() + A.nonZeros(), inner_.begin());
-  }
-  void remember_pattern(const SparseMatrix& A) {
-    rows_ = A.rows();
-    nonzeros_ = A.nonZeros();
-    outer_.assign(A.outerIndexPtr(), A.outerIndexPtr() + A.outerSize() + 1);
-    inner_.assign(A.innerIndexPtr(), A.innerIndexPtr() + A.nonZeros());
-  }
-  Eigen::CholmodDecomposition<SparseMatrix, Eigen::Lower> llt_;
-  int analyses_ = 0;
-  Eigen::Index rows_ = 0, nonzeros_ = 0;
-  std::vector<SparseMatrix::StorageIndex> outer_, inner_;
+  CholmodFactor factor_;
 };
 
 class ConjugateGradientSolver final : public LinearSolver {
@@ -94,6 +67,59 @@ class ConjugateGradientSolver final : public LinearSolver {
 };
 
 }  // namespace
+
+struct CholmodFactor::Impl {
+  Impl() {
+    // CHOLMOD parallelises parts of its work with OpenMP; one thread keeps runs bit-for-bit
+    // reproducible and leaves the cores to the collision pipeline.
+    omp_set_num_threads(1);
+  }
+  bool same_pattern(const SparseMatrix& A) const {
+    return analyses > 0 && A.rows() == rows && A.nonZeros() == nonzeros &&
+           std::equal(A.outerIndexPtr(), A.outerIndexPtr() + A.outerSize() + 1, outer.begin()) &&
+           std::equal(A.innerIndexPtr(), A.innerIndexPtr() + A.nonZeros(), inner.begin());
+  }
+  void remember_pattern(const SparseMatrix& A) {
+    rows = A.rows();
+    nonzeros = A.nonZeros();
+    outer.assign(A.outerIndexPtr(), A.outerIndexPtr() + A.outerSize() + 1);
+    inner.assign(A.innerIndexPtr(), A.innerIndexPtr() + A.nonZeros());
+  }
+  Eigen::CholmodDecomposition<SparseMatrix, Eigen::Lower> llt;
+  int analyses = 0;
+  Eigen::Index rows = 0, nonzeros = 0;
+  std::vector<SparseMatrix::StorageIndex> outer, inner;
+};
+
+CholmodFactor::CholmodFactor() : impl_(std::make_unique<Impl>()) {}
+CholmodFactor::~CholmodFactor() = default;
+CholmodFactor::CholmodFactor(CholmodFactor&&) noexcept = default;
+CholmodFactor& CholmodFactor::operator=(CholmodFactor&&) noexcept = default;
+
+bool CholmodFactor::factorise(const SparseMatrix& A) {
+  Impl& f = *impl_;
+  if (!f.same_pattern(A)) {
+    f.llt.setMode(A.rows() < SUPERNODAL_MIN_ROWS ? Eigen::CholmodSimplicialLLt : Eigen::CholmodSupernodalLLt);
+    f.llt.analyzePattern(A);
+    ++f.analyses;
+    f.remember_pattern(A);
+  }
+  f.llt.factorize(A);
+  return f.llt.info() == Eigen::Success;
+}
+
+bool CholmodFactor::solve(const Eigen::Matrix<Scalar, Eigen::Dynamic, 3>& B,
+                          Eigen::Matrix<Scalar, Eigen::Dynamic, 3>& X) const {
+  X = impl_->llt.solve(B);
+  return impl_->llt.info() == Eigen::Success && X.allFinite();
+}
+
+bool CholmodFactor::solve(const VectorX& b, VectorX& x) const {
+  x = impl_->llt.solve(b);
+  return impl_->llt.info() == Eigen::Success && x.allFinite();
+}
+
+int CholmodFactor::analyses() const { return impl_->analyses; }
 
 std::unique_ptr<LinearSolver> make_linear_solver(const SolverSpec& spec) {
   if (spec.kind == SolverKind::ConjugateGradient) return std::make_unique<ConjugateGradientSolver>(spec);

@@ -200,7 +200,7 @@ RunOutcome run_simulation(const Model& model, const RunSettings& settings, const
     return outcome;
   };
 
-  Integrator integrator(model, make_linear_solver(model.scene.solver), settings.threads);
+  Integrator integrator(model, settings.threads);
   try {
     write_frame(state, measure(model, state, 0));
   } catch (const std::runtime_error& e) {  // OutputError, MeshFileError

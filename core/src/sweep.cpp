@@ -21,6 +21,7 @@ std::string SweepSetting::label() const {
   std::ostringstream out;
   out << "steps=" << frame_steps << " solver=";
   if (solver.kind == SolverKind::Cholmod) out << "cholmod";
+  else if (solver.kind == SolverKind::Projective) out << "projective:" << solver.iterations << ":" << solver.chebyshev;
   else out << "cg:" << solver.tolerance;
   out << " ccd=" << ccd::method_name(method) << " thickness=" << thickness << " impulses=" << max_impulse_iterations
       << " zones=" << max_zone_iterations;
@@ -65,7 +66,35 @@ SolverSpec parse_solver_setting(const std::string& text, const SolverSpec& scene
     }
     return spec;
   }
-  throw std::invalid_argument("'" + text + "': expected cholmod, cg or cg:TOLERANCE");
+  if (text == "projective" || text.rfind("projective:", 0) == 0) {
+    spec.kind = SolverKind::Projective;
+    const std::string expected = "': expected projective:ITERATIONS or projective:ITERATIONS:CHEBYSHEV with iterations from 1 to " +
+                                 std::to_string(MAX_PROJECTIVE_ITERATIONS) + " and a Chebyshev estimate from 0 to 0.9999";
+    std::stringstream fields(text.substr(std::string("projective").size()));
+    std::string field;
+    std::getline(fields, field, ':');  // empty: before the first colon
+    int index = 0;
+    while (std::getline(fields, field, ':')) {
+      std::size_t used = 0;
+      double value = 0;
+      try {
+        value = std::stod(field, &used);
+      } catch (const std::exception&) {
+        used = 0;
+      }
+      const bool whole = used == field.size() && !field.empty();
+      if (index == 0 && whole && value >= 1 && value <= MAX_PROJECTIVE_ITERATIONS && value == std::floor(value))
+        spec.iterations = int(value);
+      else if (index == 1 && whole && value >= 0 && value <= MAX_CHEBYSHEV_RHO)
+        spec.chebyshev = value;
+      else
+        throw std::invalid_argument("'" + text + expected);
+      ++index;
+    }
+    if (text.back() == ':') throw std::invalid_argument("'" + text + expected);
+    return spec;
+  }
+  throw std::invalid_argument("'" + text + "': expected cholmod, cg, cg:TOLERANCE, projective or projective:ITERATIONS[:CHEBYSHEV]");
 }
 
 namespace {
@@ -90,7 +119,7 @@ SweepResult simulate(const Scene& scene, const SweepSetting& setting, int frames
   result.setting = setting;
   const Model model = build_model(with_setting(scene, setting));
   State state = initial_state(model);
-  Integrator integrator(model, make_linear_solver(model.scene.solver), 1);
+  Integrator integrator(model, 1);
   const auto record = [&] {
     trajectory.positions.push_back(state.positions);
     trajectory.energy.push_back(kinetic_energy(model, state) + potential_energy(model, state));
@@ -175,7 +204,7 @@ void mark_pareto_front(std::vector<SweepResult>& results) {
 }
 
 std::string sweep_csv_header() {
-  return "reference,frame_steps,solver,cg_tolerance,method,thickness,max_impulse_iterations,max_zone_iterations,frames_done,failed,"
+  return "reference,frame_steps,solver,cg_tolerance,projective_iterations,chebyshev,method,thickness,max_impulse_iterations,max_zone_iterations,frames_done,failed,"
          "wall_ms_per_frame,rms_error_m,max_error_m,energy_error_j,energy_drift_j,penetrations,pareto,failure";
 }
 
@@ -184,9 +213,10 @@ std::string sweep_csv_row(const SweepResult& r) {
   std::string failure = r.failure;
   std::replace(failure.begin(), failure.end(), '"', '\'');
   char row[512];
-  std::snprintf(row, sizeof row, "%d,%d,%s,%.3g,%s,%.6g,%d,%d,%d,%d,%.3f,%.6e,%.6e,%.6e,%.6e,%ld,%d,", int(r.reference),
-                s.frame_steps, s.solver.kind == SolverKind::Cholmod ? "cholmod" : "cg",
-                s.solver.kind == SolverKind::Cholmod ? 0.0 : double(s.solver.tolerance),
+  const bool cg = s.solver.kind == SolverKind::ConjugateGradient, projective = s.solver.kind == SolverKind::Projective;
+  std::snprintf(row, sizeof row, "%d,%d,%s,%.3g,%d,%.6g,%s,%.6g,%d,%d,%d,%d,%.3f,%.6e,%.6e,%.6e,%.6e,%ld,%d,", int(r.reference),
+                s.frame_steps, cg ? "cg" : projective ? "projective" : "cholmod", cg ? double(s.solver.tolerance) : 0.0,
+                projective ? s.solver.iterations : 0, projective ? double(s.solver.chebyshev) : 0.0,
                 std::string(ccd::method_name(s.method)).c_str(), double(s.thickness), s.max_impulse_iterations,
                 s.max_zone_iterations, r.frames_done, int(r.failed), r.wall_ms_per_frame, r.rms_error, r.max_error, r.energy_error,
                 r.energy_drift, r.penetrations, int(r.pareto));

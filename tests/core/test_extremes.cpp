@@ -29,7 +29,7 @@ struct Outcome {
 Outcome simulate(const std::string& json, Scalar seconds) {
   const Model model = build_model(parse_scene(json, "extreme.json"));
   State state = initial_state(model);
-  Integrator integrator(model, make_linear_solver(model.scene.solver));
+  Integrator integrator(model);
   Outcome out;
   out.initial_energy = out.max_energy = kinetic_energy(model, state) + potential_energy(model, state);
   const int steps = int(std::round(seconds / model.scene.timestep()));

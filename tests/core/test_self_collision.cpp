@@ -43,7 +43,7 @@ std::string scene(Scalar ratio, bool self, bool on_ground) {
 Outcome simulate(const std::string& json, int steps) {
   const Model model = build_model(parse_scene(json, "self_collision.json"));
   State state = initial_state(model);
-  Integrator integrator(model, make_linear_solver(model.scene.solver));
+  Integrator integrator(model);
   Outcome out;
   out.initial_energy = out.max_energy = kinetic_energy(model, state) + potential_energy(model, state);
   for (int s = 0; s < steps; ++s) {

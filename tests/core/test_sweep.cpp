@@ -24,15 +24,17 @@ SweepResult result(double ms, double rms, bool failed = false, long penetrations
 TEST(Sweep, GridIsTheProductOfTheKnobs) {
   SweepGrid grid;
   grid.frame_steps = {5, 10, 20};
-  grid.solvers = {SolverSpec{}, SolverSpec{SolverKind::ConjugateGradient, 1e-4, 100}};
+  SolverSpec projective;
+  projective.kind = SolverKind::Projective;
+  grid.solvers = {SolverSpec{}, SolverSpec{SolverKind::ConjugateGradient, 1e-4, 100}, projective};
   grid.methods = {ccd::Method::Vincent, ccd::Method::Conservative};
   grid.thickness = {0.005};
   grid.max_impulse_iterations = {4, 8};
   grid.max_zone_iterations = {16};
   const auto settings = grid.settings();
-  EXPECT_EQ(settings.size(), 3u * 2 * 2 * 1 * 2 * 1);
+  EXPECT_EQ(settings.size(), 3u * 3 * 2 * 1 * 2 * 1);
   EXPECT_EQ(settings.front().label(), "steps=5 solver=cholmod ccd=vincent thickness=0.005 impulses=4 zones=16");
-  EXPECT_EQ(settings.back().label(), "steps=20 solver=cg:0.0001 ccd=conservative thickness=0.005 impulses=8 zones=16");
+  EXPECT_EQ(settings.back().label(), "steps=20 solver=projective:10:0 ccd=conservative thickness=0.005 impulses=8 zones=16");
 }
 
 TEST(Sweep, SolverSettings) {
@@ -43,7 +45,16 @@ TEST(Sweep, SolverSettings) {
   EXPECT_EQ(cg.tolerance, 1e-8);
   EXPECT_EQ(cg.max_iterations, 500);
   EXPECT_EQ(parse_solver_setting("cg:1e-3", scene).tolerance, 1e-3);
-  for (const char* bad : {"lu", "cg:", "cg:abc", "cg:0", "cg:2", "cg:1e-3x", "cholmod:1"}) {
+  const SolverSpec projective = parse_solver_setting("projective:20:0.95", scene);
+  EXPECT_EQ(projective.kind, SolverKind::Projective);
+  EXPECT_EQ(projective.iterations, 20);
+  EXPECT_EQ(projective.chebyshev, 0.95);
+  EXPECT_EQ(parse_solver_setting("projective:5", scene).iterations, 5);
+  EXPECT_EQ(parse_solver_setting("projective:5", scene).chebyshev, scene.chebyshev);
+  EXPECT_EQ(parse_solver_setting("projective", scene).iterations, scene.iterations);
+  for (const char* bad : {"lu", "cg:", "cg:abc", "cg:0", "cg:2", "cg:1e-3x", "cholmod:1", "projective:", "projective:0",
+                          "projective:2.5", "projective:10:1", "projective:10:-0.1", "projective:10:0.9:1",
+                          "projective:10:", "projectivex"}) {
     try {
       parse_solver_setting(bad, scene);
       ADD_FAILURE() << bad << " accepted";

@@ -1,10 +1,14 @@
 #pragma once
 /// \file
-/// The state of a run and the implicit step: linearised backward Euler (Baraff and Witkin,
-/// "Large steps in cloth simulation", SIGGRAPH 1998):
-///     (M - h dF/dv - h^2 dF/dx) dv = h (F + h dF/dx v),   v += dv,   x += h v,
-/// with pinned and scripted vertices eliminated from the system (their dv is prescribed and
-/// moved to the right-hand side), then the analytic obstacles' contact response.
+/// The state of a run and the implicit step, by one of two solvers (the scene's solver.type):
+/// - linearised backward Euler (Baraff and Witkin, "Large steps in cloth simulation",
+///   SIGGRAPH 1998), the accurate reference:
+///       (M - h dF/dv - h^2 dF/dx) dv = h (F + h dF/dx v),   v += dv,   x += h v,
+///   with a sparse Cholesky factorisation (or conjugate gradient) of its 3n x 3n matrix every step;
+/// - the projective solver (projective.h): backward Euler's minimisation by local-global
+///   iterations, one factorisation of an n x n matrix for the run.
+/// Pinned and scripted vertices are eliminated from either system (their motion is prescribed);
+/// then the contact response: analytic obstacles and the collision pipeline.
 
 #include <memory>
 #include <string>
@@ -52,12 +56,16 @@ struct StepReport {
 /// Tolerances on energy are fractions of it.
 Scalar energy_scale(const Model& model);
 
-/// Holds what a run reuses from step to step: the system's sparsity pattern with each spring's
-/// place in it, and the linear solver (whose symbolic analysis CHOLMOD keeps).
+class ProjectiveSolver;
+
+/// Holds what a run reuses from step to step: for the linearised solve, the system's sparsity
+/// pattern with each spring's place in it and the linear solver (whose symbolic analysis
+/// CHOLMOD keeps); for the projective solver, its factorisations.
 class Integrator {
  public:
-  /// threads: for the collision pipeline's narrow phase (results do not depend on it).
-  Integrator(const Model& model, std::unique_ptr<LinearSolver> solver, int threads = 1);
+  /// The scene's solver; threads: for the collision pipeline's narrow phase (results do not
+  /// depend on it).
+  explicit Integrator(const Model& model, int threads = 1);
   ~Integrator();
   /// One step of the scene's timestep: forces -> implicit solve -> analytic obstacles ->
   /// collision pipeline (broad phase, narrow phase, response) -> positions -> checks. A step
@@ -65,7 +73,8 @@ class Integrator {
   /// tolerance) is taken again in 2, 4, ... equal parts, at most 2^solver.max_halvings, while
   /// that excess keeps falling by half at least; the attempt with the least excess is kept.
   StepReport step(State& state);
-  const LinearSolver& solver() const { return *solver_; }
+  /// Symbolic analyses of the solver's sparse factorisations so far (0 for cg).
+  int analyses() const;
   /// The collision pipeline, or nullptr when the scene needs none.
   CollisionPipeline* collisions() { return collisions_.get(); }
 
@@ -81,6 +90,17 @@ class Integrator {
   // receive the results. False when the response changed nothing.
   bool spread_response(const std::vector<Vec3>& solved, std::vector<Vec3>& motion, std::vector<Vec3>& velocities,
                        StepReport& report);
+  // The linearised system assembled at the state (forces into the workspace) and solved:
+  // the state's velocities advanced; false (report says why) when the solve failed.
+  bool solve_linearised(State& state, const std::vector<Vec3>& pinned_dv, StepReport& report);
+  // The projective solver's step from the state: its velocities advanced (the pinned ones by
+  // pinned_dv); the handles' springs' forces added to the workspace's forces for the ledger.
+  bool solve_projective(State& state, const std::vector<Vec3>& pinned_dv, StepReport& report);
+  // spread_response's counterpart for the projective solver: the step solved again with the
+  // contact vertices held to their new end positions (the motion), then to where their new
+  // velocities would take them (the velocities); start is the step's start.
+  bool spread_projective(const std::vector<Vec3>& start, const std::vector<Vec3>& solved, std::vector<Vec3>& motion,
+                         std::vector<Vec3>& velocities, StepReport& report);
   // One step of size h_, unchecked.
   StepReport advance(State& state);
   // The response to contact: analytic obstacles, then the collision pipeline; changes motion
@@ -91,7 +111,8 @@ class Integrator {
   Scalar source_work(const std::vector<Vec3>& pinned_dv, const std::vector<Vec3>& air_forces,
                      const std::vector<Vec3>& velocities) const;
   const Model& model_;
-  std::unique_ptr<LinearSolver> solver_;
+  std::unique_ptr<LinearSolver> solver_;         // linearised: cholmod or cg
+  std::unique_ptr<ProjectiveSolver> projective_;  // or projective
   std::unique_ptr<CollisionPipeline> collisions_;  // only when the scene needs it
   std::unique_ptr<Workspace> work_;
   Scalar h_ = 0;                 // the step being taken: the scene's timestep or a part of it

@@ -38,4 +38,27 @@ class LinearSolver {
 
 std::unique_ptr<LinearSolver> make_linear_solver(const SolverSpec& spec);
 
+/// One CHOLMOD factorisation of a symmetric positive definite matrix, kept for many solves
+/// (the projective solver's system, which does not change during a run). The symbolic analysis
+/// is reused while the matrix keeps its sparsity pattern.
+class CholmodFactor {
+ public:
+  CholmodFactor();
+  ~CholmodFactor();
+  CholmodFactor(CholmodFactor&&) noexcept;
+  CholmodFactor& operator=(CholmodFactor&&) noexcept;
+  /// Factorises A (both triangles stored); false when A is not positive definite.
+  bool factorise(const SparseMatrix& A);
+  /// X = A^-1 B for every column of B; false when the solve failed or gave a non-finite X.
+  bool solve(const Eigen::Matrix<Scalar, Eigen::Dynamic, 3>& B, Eigen::Matrix<Scalar, Eigen::Dynamic, 3>& X) const;
+  /// X = A^-1 b.
+  bool solve(const VectorX& b, VectorX& x) const;
+  /// How many times the symbolic analysis ran.
+  int analyses() const;
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
 }  // namespace drape

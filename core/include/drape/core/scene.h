@@ -37,6 +37,8 @@ inline constexpr Scalar MAX_SPEED = 1e5;          ///< m/s: initial, handle, obs
 inline constexpr Scalar MAX_ANGULAR_SPEED = 1e4;  ///< rad/s: motion angular velocities
 inline constexpr Scalar MAX_ACCELERATION = 1e4;   ///< m/s^2: gravity
 inline constexpr Scalar MAX_THICKNESS = 1;        ///< m: collisions.thickness (see also the cloth-size rule in build_model)
+inline constexpr int MAX_PROJECTIVE_ITERATIONS = 1000;  ///< solver.iterations
+inline constexpr Scalar MAX_CHEBYSHEV_RHO = 0.9999;     ///< solver.chebyshev
 inline constexpr Scalar MAX_THICKNESS_OF_CLOTH = 0.25;  ///< collisions.thickness at most this times each cloth's diagonal
 inline constexpr Scalar MIN_FRAME_TIME = 1e-6;    ///< s
 inline constexpr Scalar MAX_FRAME_TIME = 60;      ///< s
@@ -125,7 +127,10 @@ struct WindSpec {
   Scalar drag = 1.0;             ///< dimensionless drag coefficient
 };
 
-enum class SolverKind { Cholmod, ConjugateGradient };
+/// cholmod: linearised backward Euler, a sparse Cholesky factorisation every step (the accurate
+/// reference); cg: the same system by conjugate gradient; projective: the local-global solver
+/// for mass-spring systems (projective dynamics), one factorisation for the run.
+enum class SolverKind { Cholmod, ConjugateGradient, Projective };
 
 struct SolverSpec {
   SolverKind kind = SolverKind::Cholmod;
@@ -134,6 +139,13 @@ struct SolverSpec {
   /// A step that makes energy (beyond a tolerance) is taken again in 2, 4, ... parts, at most
   /// 2^max_halvings (Integrator::step); 0 takes every step as it comes.
   int max_halvings = 3;
+  /// projective: local-global iterations a step (each one pass over the springs and one solve
+  /// with the run's factorisation).
+  int iterations = 10;
+  /// projective: the iteration's spectral radius estimate for Chebyshev acceleration (Wang
+  /// 2015), from 0 (none, the default) to below 1; too high an estimate diverges (the energy
+  /// limits stop it).
+  Scalar chebyshev = 0;
 };
 
 struct CollisionSpec {

@@ -1,0 +1,119 @@
+// The projective solver (core/src/projective.cpp): exact free fall, convergence to the
+// linearised backward Euler reference as its iterations grow, one factorisation for a run,
+// handles followed exactly, the response spread with the cloth held.
+#include <gtest/gtest.h>
+
+#include "drape/core/integrator.h"
+
+using namespace drape;
+
+namespace {
+
+Model model_of(const std::string& json) { return build_model(parse_scene(json, "inline.json")); }
+
+// A 1 m cloth pinned at two corners swinging down, with the given solver section.
+Model hanging(const std::string& solver) {
+  return model_of(R"({"frame_time": 0.04, "frame_steps": 4,
+    "cloths": [{"grid": {"size": [1, 1], "resolution": [10, 10]}, "material": {"damping": 0.01, "air_damping": 1.0}}],
+    "handles": [{"corners": ["top-left", "top-right"]}], "solver": )" + solver + "}");
+}
+
+// The largest distance between the vertices of two runs of the same cloth.
+Scalar largest_distance(const State& a, const State& b) {
+  Scalar worst = 0;
+  for (std::size_t v = 0; v < a.positions.size(); ++v) worst = std::max(worst, (a.positions[v] - b.positions[v]).norm());
+  return worst;
+}
+
+State run(const Model& model, int steps, Integrator* integrator = nullptr) {
+  State state = initial_state(model);
+  Integrator own(model);
+  Integrator& stepper = integrator ? *integrator : own;
+  for (int k = 0; k < steps; ++k) EXPECT_TRUE(stepper.step(state).ok) << "step " << k;
+  return state;
+}
+
+}  // namespace
+
+TEST(Projective, FreeFallIsBackwardEulerExactly) {
+  // No pins, no air, springs at rest: every iteration returns the inertial prediction, so
+  // after n steps of h, v = n h g and z = h^2 g n (n + 1) / 2, as backward Euler gives (to
+  // rounding: v is a difference of positions over h).
+  const Model model = model_of(R"({"frame_time": 0.01, "frame_steps": 2, "cloths": [{"grid": {"resolution": [6, 6]},
+    "material": {"air_damping": 0}}], "solver": {"type": "projective", "iterations": 3, "chebyshev": 0}})");
+  const int n = 40;
+  const State state = run(model, n);
+  const Scalar h = model.scene.timestep(), g = model.scene.gravity.z();
+  for (std::size_t v = 0; v < state.positions.size(); ++v) {
+    EXPECT_NEAR(state.velocities[v].z(), n * h * g, 1e-10);
+    EXPECT_NEAR(state.positions[v].z() - model.initial_positions[v].z(), h * h * g * n * (n + 1) / 2, 1e-12);
+    EXPECT_NEAR(state.positions[v].x(), model.initial_positions[v].x(), 1e-11);
+  }
+}
+
+TEST(Projective, MoreIterationsComeCloserToTheLinearisedReference) {
+  // Converged, the projective solver is backward Euler itself, the reference its linearisation
+  // (their difference shrinks with the step); a few iterations leave the springs soft.
+  const State reference = run(hanging(R"({"type": "cholmod"})"), 25);
+  const Scalar few = largest_distance(reference, run(hanging(R"({"type": "projective", "iterations": 3, "chebyshev": 0})"), 25));
+  const Scalar many =
+      largest_distance(reference, run(hanging(R"({"type": "projective", "iterations": 300, "chebyshev": 0})"), 25));
+  const Scalar accelerated =
+      largest_distance(reference, run(hanging(R"({"type": "projective", "iterations": 10, "chebyshev": 0.9})"), 25));
+  EXPECT_LT(many, 0.2 * few) << few << " m with 3 iterations, " << many << " m with 300";
+  EXPECT_LT(accelerated, few);
+}
+
+TEST(Projective, OneFactorisationServesTheWholeRun) {
+  // One per step size: without the step's halving (which takes a step in parts), one.
+  const Model model = hanging(R"({"type": "projective", "max_halvings": 0})");
+  Integrator integrator(model);
+  run(model, 100, &integrator);
+  EXPECT_EQ(integrator.analyses(), 1);
+}
+
+TEST(Projective, HandlesFollowTheirMotionExactly) {
+  const Model model = model_of(R"({"frame_time": 0.04, "frame_steps": 4, "cloths": [{"grid": {"resolution": [6, 6]}}],
+    "handles": [{"corners": ["top-left", "top-right"], "motion": {"velocity": [0, 0, 0.5], "angular_velocity": [0, 0, 1]}}],
+    "solver": {"type": "projective"}})");
+  const State state = run(model, 30);
+  for (const Pin& pin : model.pins) {
+    const Vec3 expected = model.scene.handles[pin.handle].motion.position(model.initial_positions[pin.vertex], state.time);
+    EXPECT_LT((state.positions[pin.vertex] - expected).norm(), 1e-12);
+  }
+}
+
+TEST(Projective, EnergyStaysBelowItsStartWithoutInputWhenConverged) {
+  // Converged, it is backward Euler, which dissipates. (With its default 10 iterations the
+  // stiff springs of this cloth stay stretched and the energy rises above the start: the
+  // solver's open problem, docs/solvers.md.)
+  const Model model = hanging(R"({"type": "projective", "iterations": 300, "max_halvings": 0})");
+  State state = initial_state(model);
+  Integrator integrator(model);
+  const Scalar start = kinetic_energy(model, state) + potential_energy(model, state);
+  for (int k = 0; k < 200; ++k) {
+    ASSERT_TRUE(integrator.step(state).ok);
+    EXPECT_LE(kinetic_energy(model, state) + potential_energy(model, state), start) << "step " << k;
+  }
+}
+
+TEST(Projective, AClothLandingOnASphereStaysOutsideItAndAtRest) {
+  const Model model = model_of(R"({"frame_time": 0.04, "frame_steps": 8, "frames": 30,
+    "cloths": [{"grid": {"size": [1, 1], "resolution": [16, 16]}, "transform": {"translate": [0, 0, 1.1]}}],
+    "obstacles": [{"sphere": {"center": [0, 0, 0.5], "radius": 0.5}}, {"plane": {"point": [0, 0, 0], "normal": [0, 0, 1]}}],
+    "solver": {"type": "projective", "iterations": 100}})");
+  State state = initial_state(model);
+  Integrator integrator(model);
+  const Scalar start = kinetic_energy(model, state) + potential_energy(model, state);
+  int contacts = 0;
+  for (int k = 0; k < 8 * 30; ++k) {
+    const StepReport r = integrator.step(state);
+    ASSERT_TRUE(r.ok) << r.failure;
+    contacts += r.obstacle_contacts;
+    EXPECT_LE(kinetic_energy(model, state) + potential_energy(model, state), start) << "step " << k;
+    for (const Vec3& x : state.positions) EXPECT_GE((x - Vec3(0, 0, 0.5)).norm(), 0.5 + 0.005 - 1e-9);
+  }
+  EXPECT_GT(contacts, 0);
+  EXPECT_LT(kinetic_energy(model, state), 1e-3);
+  EXPECT_LT(max_stretch(model, state), 1.05);
+}
