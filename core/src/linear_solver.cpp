@@ -91,7 +91,7 @@ struct CholmodFactor::Impl {
   std::vector<SparseMatrix::StorageIndex> outer, inner;
 };
 
-CholmodFactor::CholmodFactor() : impl_(std::make_unique<Impl>()) {}
+CholmodFactor::CholmodFactor(Use use) : impl_(std::make_unique<Impl>()), use_(use) {}
 CholmodFactor::~CholmodFactor() = default;
 CholmodFactor::CholmodFactor(CholmodFactor&&) noexcept = default;
 CholmodFactor& CholmodFactor::operator=(CholmodFactor&&) noexcept = default;
@@ -99,7 +99,8 @@ CholmodFactor& CholmodFactor::operator=(CholmodFactor&&) noexcept = default;
 bool CholmodFactor::factorise(const SparseMatrix& A) {
   Impl& f = *impl_;
   if (!f.same_pattern(A)) {
-    f.llt.setMode(A.rows() < SUPERNODAL_MIN_ROWS ? Eigen::CholmodSimplicialLLt : Eigen::CholmodSupernodalLLt);
+    const bool supernodal = use_ == Use::Refactorised && A.rows() >= SUPERNODAL_MIN_ROWS;
+    f.llt.setMode(supernodal ? Eigen::CholmodSupernodalLLt : Eigen::CholmodSimplicialLLt);
     f.llt.analyzePattern(A);
     ++f.analyses;
     f.remember_pattern(A);

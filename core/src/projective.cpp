@@ -1,6 +1,7 @@
 #include "projective.h"
 
 #include <algorithm>
+#include <limits>
 
 namespace drape {
 
@@ -10,7 +11,8 @@ ProjectiveSolver::ProjectiveSolver(const Model& model, std::vector<int> free_ind
       free_count_(free_count),
       iterations_(model.scene.solver.iterations),
       rho_(model.scene.solver.chebyshev) {
-  base_.setZero(free_count_, 3);
+  base_.assign(std::size_t(free_count_), Vec3::Zero());
+  sums_ = base_;
   rhs_.setZero(free_count_, 3);
   solution_.setZero(free_count_, 3);
 }
@@ -32,6 +34,10 @@ ProjectiveSolver::System* ProjectiveSolver::system(Scalar h, std::string& error)
     if (a >= 0 && b >= 0) entries.emplace_back(a, b, -weight), entries.emplace_back(b, a, -weight);
   }
   System sys;
+  sys.springs.reserve(m.springs.size());
+  for (const Spring& s : m.springs)
+    sys.springs.push_back({s.i, s.j, free_index_[std::size_t(s.i)], free_index_[std::size_t(s.j)], s.rest_length,
+                           h * h * s.stiffness, h * s.damping});
   sys.matrix.resize(free_count_, free_count_);
   sys.matrix.setFromTriplets(entries.begin(), entries.end());  // duplicates summed
   sys.matrix.makeCompressed();
@@ -59,6 +65,9 @@ bool ProjectiveSolver::solve(const ProjectiveStep& step, std::vector<Vec3>& posi
   System* sys = system(h, error);
   if (!sys) return false;
   const CholmodFactor* factor = &sys->factor;
+  spring_start_.resize(sys->springs.size());
+  for (std::size_t k = 0; k < sys->springs.size(); ++k)
+    spring_start_[k] = x0[std::size_t(sys->springs[k].i)] - x0[std::size_t(sys->springs[k].j)];
 
   // The right-hand side's constant part: M y + h a M (x0 + h w) and the held vertices' pull.
   const Vec3 wind = m.scene.wind ? m.scene.wind->velocity : Vec3::Zero();
@@ -67,7 +76,7 @@ bool ProjectiveSolver::solve(const ProjectiveStep& step, std::vector<Vec3>& posi
     if (a < 0) continue;
     const Scalar mass = m.masses[v];
     const Vec3 inertial = mass * (x0[v] + h * (*step.velocities)[v]) + h * h * (*step.forces)[v];
-    base_.row(a) = (inertial + h * m.air_damping[v] * mass * (x0[v] + h * wind)).transpose();
+    base_[std::size_t(a)] = inertial + h * m.air_damping[v] * mass * (x0[v] + h * wind);
   }
   if (held && !held->vertices.empty()) {
     HeldKey key{h, hold, held->vertices};
@@ -89,40 +98,79 @@ bool ProjectiveSolver::solve(const ProjectiveStep& step, std::vector<Vec3>& posi
       held_key_ = std::move(key);
     }
     for (std::size_t k = 0; k < held->vertices.size(); ++k)
-      base_.row(free_index_[std::size_t(held->vertices[k])]) += held_penalty_[k] * held->targets[k].transpose();
+      base_[std::size_t(free_index_[std::size_t(held->vertices[k])])] += held_penalty_[k] * held->targets[k];
     factor = &held_factor_;
   }
 
+  // The objective being minimised, at the current positions: its vertices' part here, the
+  // springs' in the local step's pass.
+  const auto vertex_objective = [&](const std::vector<Vec3>& x) {
+    Scalar total = 0;
+    for (std::size_t v = 0; v < x.size(); ++v) {
+      const int a = free_index_[v];
+      if (a < 0) continue;
+      const Scalar mass = m.masses[v];
+      const Vec3 y = x0[v] + h * (*step.velocities)[v] + h * h / mass * (*step.forces)[v];
+      total += 0.5 * mass * (x[v] - y).squaredNorm() + 0.5 * h * m.air_damping[v] * mass * (x[v] - x0[v] - h * wind).squaredNorm();
+    }
+    if (held)
+      for (std::size_t k = 0; k < held->vertices.size(); ++k)
+        total += 0.5 * held_penalty_[k] * (x[std::size_t(held->vertices[k])] - held->targets[k]).squaredNorm();
+    return total;
+  };
+
   // Chebyshev semi-iterative acceleration (Wang, "A Chebyshev semi-iterative approach for
   // accelerating projective and position-based dynamics", SIGGRAPH Asia 2015, eq. 11) with
-  // the iteration's spectral radius estimate rho (an overestimate diverges).
+  // the iteration's spectral radius estimate rho. The plain iteration never raises the
+  // objective; an accelerated one that does (rho too high for this step, or the springs'
+  // directions turning under the extrapolation) is undone and the acceleration restarts from
+  // the best iterate. The best iterate is the result.
   const Scalar rho = rho_;
   previous_ = positions;
   current_ = positions;
-  Scalar omega = 1;
-  for (int iteration = 0; iteration < iterations_; ++iteration) {
-    // Local step: each spring's rest-length target p and damping target q, weighted.
-    rhs_ = base_;
-    for (const Spring& s : m.springs) {
+  best_ = positions;
+  Scalar omega = 1, best_objective = std::numeric_limits<Scalar>::infinity();
+  int accelerated = 0;  // global steps since the acceleration (re)started
+  for (int pass = 0; pass <= iterations_; ++pass) {
+    // Local step: each spring's rest-length target p = r d and damping target q = z - ((z -
+    // z0) . d) d, weighted; and the objective at the current positions.
+    sums_ = base_;
+    Scalar objective = vertex_objective(positions);
+    for (std::size_t k = 0; k < sys->springs.size(); ++k) {
+      const SpringTerm& s = sys->springs[k];
       const Vec3 z = positions[std::size_t(s.i)] - positions[std::size_t(s.j)];
-      const Vec3 z0 = x0[std::size_t(s.i)] - x0[std::size_t(s.j)];
+      const Vec3& z0 = spring_start_[k];
       const Scalar length = z.norm();
       // A spring of zero length has no direction: its start's, or any.
       const Vec3 d = length > 0 ? Vec3(z / length) : z0.norm() > 0 ? Vec3(z0.normalized()) : Vec3::UnitX();
-      const Vec3 p = s.rest_length * d;
-      const Vec3 q = z - (z - z0).dot(d) * d;
-      const Vec3 target = h * h * s.stiffness * p + h * s.damping * q;
-      const Scalar weight = h * h * s.stiffness + h * s.damping;
-      const int a = free_index_[std::size_t(s.i)], b = free_index_[std::size_t(s.j)];
-      if (a >= 0) rhs_.row(a) += (b >= 0 ? target : Vec3(target + weight * positions[std::size_t(s.j)])).transpose();
-      if (b >= 0) rhs_.row(b) += (a >= 0 ? Vec3(-target) : Vec3(weight * positions[std::size_t(s.i)] - target)).transpose();
+      const Scalar along = (z - z0).dot(d);
+      objective += 0.5 * s.elastic * (length - s.rest) * (length - s.rest) + 0.5 * s.viscous * along * along;
+      // The weighted targets: rest length along d (elastic), z less its change along d (viscous).
+      const Vec3 target = (s.elastic * s.rest) * d + s.viscous * (z - along * d);
+      const Scalar weight = s.elastic + s.viscous;
+      if (s.a >= 0) sums_[std::size_t(s.a)] += s.b >= 0 ? target : Vec3(target + weight * positions[std::size_t(s.j)]);
+      if (s.b >= 0) sums_[std::size_t(s.b)] += s.a >= 0 ? Vec3(-target) : Vec3(weight * positions[std::size_t(s.i)] - target);
     }
+    if (objective < best_objective) {
+      best_objective = objective;
+      best_ = positions;
+    } else if (accelerated > 1) {
+      positions = best_;
+      previous_ = positions;
+      current_ = positions;
+      accelerated = 0;
+      ++restarts_;
+      continue;  // the local step again, at the best iterate
+    }
+    if (pass == iterations_) break;  // the last pass only weighs the last iterate
     // Global step: the run's factorisation.
+    for (int a = 0; a < free_count_; ++a) rhs_.row(a) = sums_[std::size_t(a)].transpose();
     if (!factor->solve(rhs_, solution_)) {
       error = "CHOLMOD's solve of the projective system failed";
       return false;
     }
-    omega = rho <= 0 || iteration == 0 ? 1 : iteration == 1 ? 2 / (2 - rho * rho) : 4 / (4 - rho * rho * omega);
+    omega = rho <= 0 || accelerated == 0 ? 1 : accelerated == 1 ? 2 / (2 - rho * rho) : 4 / (4 - rho * rho * omega);
+    ++accelerated;
     for (std::size_t v = 0; v < positions.size(); ++v) {
       const int a = free_index_[v];
       if (a < 0) continue;
@@ -132,6 +180,7 @@ bool ProjectiveSolver::solve(const ProjectiveStep& step, std::vector<Vec3>& posi
       current_[v] = positions[v];
     }
   }
+  positions = best_;
   return true;
 }
 

@@ -61,12 +61,23 @@ class ProjectiveSolver {
   int analyses() const;
   /// Numeric factorisations run.
   int factorisations() const { return factorisations_; }
+  /// Accelerated iterations undone because they raised the objective.
+  long restarts() const { return restarts_; }
 
  private:
   using Block = Eigen::Matrix<Scalar, Eigen::Dynamic, 3>;
+  // A spring's constants for one step size: its weights in the objective.
+  struct SpringTerm {
+    int i = 0, j = 0;        // vertices
+    int a = -1, b = -1;      // their free indices, or -1
+    Scalar rest = 0;         // rest length
+    Scalar elastic = 0;      // h^2 k
+    Scalar viscous = 0;      // h c
+  };
   struct System {
     SparseMatrix matrix;
-    CholmodFactor factor;
+    CholmodFactor factor{CholmodFactor::Use::ManySolves};
+    std::vector<SpringTerm> springs;
   };
   // The system of step size h, built and factorised on first use.
   System* system(Scalar h, std::string& error);
@@ -76,8 +87,10 @@ class ProjectiveSolver {
   int iterations_ = 0;
   Scalar rho_ = 0;                     // Chebyshev's spectral radius estimate, 0: no acceleration
   std::vector<Vec3> previous_, current_;  // the last two iterates
+  std::vector<Vec3> best_;                // the iterate with the least objective so far
+  long restarts_ = 0;
   std::map<Scalar, System> systems_;  // by step size: the scene's and its halvings
-  CholmodFactor held_factor_;          // the current step's system with the held vertices' penalty
+  CholmodFactor held_factor_;  // the step's system with the held vertices' penalty (factorised every step with contacts)
   SparseMatrix held_matrix_;
   struct HeldKey {
     Scalar h = 0, hold = 0;
@@ -86,7 +99,9 @@ class ProjectiveSolver {
   } held_key_;                         // what held_factor_ factorised
   std::vector<Scalar> held_penalty_;   // per held vertex
   std::vector<int> diagonal_offset_;   // free vertex -> offset of its diagonal entry in a system's values
-  Block base_, rhs_, solution_;
+  std::vector<Vec3> base_, sums_;  // per free vertex: the constant right-hand side, and each pass's
+  std::vector<Vec3> spring_start_;  // per spring: x_i - x_j at the step's start
+  Block rhs_, solution_;
   int factorisations_ = 0;
 };
 

@@ -34,7 +34,7 @@ TEST(Sweep, GridIsTheProductOfTheKnobs) {
   const auto settings = grid.settings();
   EXPECT_EQ(settings.size(), 3u * 3 * 2 * 1 * 2 * 1);
   EXPECT_EQ(settings.front().label(), "steps=5 solver=cholmod ccd=vincent thickness=0.005 impulses=4 zones=16");
-  EXPECT_EQ(settings.back().label(), "steps=20 solver=projective:10:0 ccd=conservative thickness=0.005 impulses=8 zones=16");
+  EXPECT_EQ(settings.back().label(), "steps=20 solver=projective:10:0.99 ccd=conservative thickness=0.005 impulses=8 zones=16");
 }
 
 TEST(Sweep, SolverSettings) {

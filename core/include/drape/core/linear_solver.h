@@ -43,7 +43,11 @@ std::unique_ptr<LinearSolver> make_linear_solver(const SolverSpec& spec);
 /// is reused while the matrix keeps its sparsity pattern.
 class CholmodFactor {
  public:
-  CholmodFactor();
+  /// What the factorisation is for: factorised every step (large systems use the supernodal
+  /// factorisation, which factorises faster), or factorised once and solved many times (the
+  /// simplicial one, whose triangular solves with few right-hand sides are faster).
+  enum class Use { Refactorised, ManySolves };
+  explicit CholmodFactor(Use use = Use::Refactorised);
   ~CholmodFactor();
   CholmodFactor(CholmodFactor&&) noexcept;
   CholmodFactor& operator=(CholmodFactor&&) noexcept;
@@ -59,6 +63,7 @@ class CholmodFactor {
  private:
   struct Impl;
   std::unique_ptr<Impl> impl_;
+  Use use_ = Use::Refactorised;
 };
 
 }  // namespace drape

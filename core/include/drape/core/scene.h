@@ -143,9 +143,9 @@ struct SolverSpec {
   /// with the run's factorisation).
   int iterations = 10;
   /// projective: the iteration's spectral radius estimate for Chebyshev acceleration (Wang
-  /// 2015), from 0 (none, the default) to below 1; too high an estimate diverges (the energy
-  /// limits stop it).
-  Scalar chebyshev = 0;
+  /// 2015), from 0 (none) to below 1; an accelerated iteration that raises the step's
+  /// objective is undone and the acceleration restarts.
+  Scalar chebyshev = 0.99;
 };
 
 struct CollisionSpec {
