@@ -370,7 +370,8 @@ int main(int argc, char** argv) {
                     limit, solve_ratio);
         // Issue 17's targets, from this run's figures.
         const auto met = [](bool ok) { return ok ? "met" : "not met"; };
-        const bool fast_enough = bullet.ok && r.falling_ms <= 0.5 * bullet.falling_ms && r.contact_ms <= 0.5 * bullet.contact_ms;
+        const bool fast_enough = bullet.ok && r.falling_ms > 0 && r.contact_ms > 0 && r.falling_ms <= 0.5 * bullet.falling_ms &&
+                                 r.contact_ms <= 0.5 * bullet.contact_ms;
         if (name == "small")
           std::printf("  %-22s target: at most 0.5x Bullet's ms a frame, nothing inside the sphere, no intersecting "
                       "triangles: %s\n", "", met(fast_enough && r.inside_sphere == 0 && r.intersecting_frames == 0));

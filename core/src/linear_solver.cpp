@@ -98,6 +98,8 @@ CholmodFactor& CholmodFactor::operator=(CholmodFactor&&) noexcept = default;
 
 bool CholmodFactor::factorise(const SparseMatrix& A) {
   Impl& f = *impl_;
+  f.rows = A.rows();
+  if (A.rows() == 0) return true;  // nothing free (every vertex pinned): CHOLMOD refuses an empty matrix
   if (!f.same_pattern(A)) {
     const bool supernodal = use_ == Use::Refactorised && A.rows() >= SUPERNODAL_MIN_ROWS;
     f.llt.setMode(supernodal ? Eigen::CholmodSupernodalLLt : Eigen::CholmodSimplicialLLt);
@@ -111,11 +113,19 @@ bool CholmodFactor::factorise(const SparseMatrix& A) {
 
 bool CholmodFactor::solve(const Eigen::Matrix<Scalar, Eigen::Dynamic, 3>& B,
                           Eigen::Matrix<Scalar, Eigen::Dynamic, 3>& X) const {
+  if (impl_->rows == 0) {
+    X.resize(0, 3);
+    return true;
+  }
   X = impl_->llt.solve(B);
   return impl_->llt.info() == Eigen::Success && X.allFinite();
 }
 
 bool CholmodFactor::solve(const VectorX& b, VectorX& x) const {
+  if (impl_->rows == 0) {
+    x.resize(0);
+    return true;
+  }
   x = impl_->llt.solve(b);
   return impl_->llt.info() == Eigen::Success && x.allFinite();
 }

@@ -66,8 +66,12 @@ bool ProjectiveSolver::solve(const ProjectiveStep& step, std::vector<Vec3>& posi
   if (!sys) return false;
   const CholmodFactor* factor = &sys->factor;
   spring_start_.resize(sys->springs.size());
-  for (std::size_t k = 0; k < sys->springs.size(); ++k)
-    spring_start_[k] = x0[std::size_t(sys->springs[k].i)] - x0[std::size_t(sys->springs[k].j)];
+  spring_direction_.resize(sys->springs.size());
+  for (std::size_t k = 0; k < sys->springs.size(); ++k) {
+    const Vec3 z0 = x0[std::size_t(sys->springs[k].i)] - x0[std::size_t(sys->springs[k].j)];
+    spring_start_[k] = z0;
+    spring_direction_[k] = z0.norm() > 0 ? Vec3(z0.normalized()) : Vec3::UnitX();
+  }
 
   // The right-hand side's constant part: M y + h a M (x0 + h w) and the held vertices' pull.
   const Vec3 wind = m.scene.wind ? m.scene.wind->velocity : Vec3::Zero();
@@ -139,14 +143,17 @@ bool ProjectiveSolver::solve(const ProjectiveStep& step, std::vector<Vec3>& posi
     for (std::size_t k = 0; k < sys->springs.size(); ++k) {
       const SpringTerm& s = sys->springs[k];
       const Vec3 z = positions[std::size_t(s.i)] - positions[std::size_t(s.j)];
-      const Vec3& z0 = spring_start_[k];
       const Scalar length = z.norm();
       // A spring of zero length has no direction: its start's, or any.
-      const Vec3 d = length > 0 ? Vec3(z / length) : z0.norm() > 0 ? Vec3(z0.normalized()) : Vec3::UnitX();
-      const Scalar along = (z - z0).dot(d);
+      const Vec3 d = length > 0 ? Vec3(z / length) : spring_direction_[k];
+      // The damping acts along the spring's direction at the step's start (as the reference
+      // solver's does): q is z's projection onto a fixed plane, so the iteration never raises
+      // the objective.
+      const Vec3& d0 = spring_direction_[k];
+      const Scalar along = (z - spring_start_[k]).dot(d0);
       objective += 0.5 * s.elastic * (length - s.rest) * (length - s.rest) + 0.5 * s.viscous * along * along;
-      // The weighted targets: rest length along d (elastic), z less its change along d (viscous).
-      const Vec3 target = (s.elastic * s.rest) * d + s.viscous * (z - along * d);
+      // The weighted targets: rest length along d (elastic), z less its change along d0 (viscous).
+      const Vec3 target = (s.elastic * s.rest) * d + s.viscous * (z - along * d0);
       const Scalar weight = s.elastic + s.viscous;
       if (s.a >= 0) sums_[std::size_t(s.a)] += s.b >= 0 ? target : Vec3(target + weight * positions[std::size_t(s.j)]);
       if (s.b >= 0) sums_[std::size_t(s.b)] += s.a >= 0 ? Vec3(-target) : Vec3(weight * positions[std::size_t(s.i)] - target);
@@ -154,7 +161,7 @@ bool ProjectiveSolver::solve(const ProjectiveStep& step, std::vector<Vec3>& posi
     if (objective < best_objective) {
       best_objective = objective;
       best_ = positions;
-    } else if (accelerated > 1) {
+    } else if (rho > 0 && accelerated > 1) {
       positions = best_;
       previous_ = positions;
       current_ = positions;

@@ -8,8 +8,8 @@
 ///     +  h sum_v a_v m_v/2 |x_v - x0_v - h w|^2,
 /// y = x0 + h v0 + h^2 M^-1 f (gravity, wind drag), where p_s is the spring's rest length along
 /// its current direction (its elastic energy, exactly), q_s is x_i - x_j with its change along
-/// that direction removed (the spring's damping c_s along its direction, exactly, as a
-/// dissipation potential), and the last term the air's damping a_v towards the wind's velocity
+/// the spring's direction at the step's start removed (the spring's damping c_s along that
+/// direction as a dissipation potential, as the linearised solver evaluates it), and the last term the air's damping a_v towards the wind's velocity
 /// w. The solver alternates a local step (every spring's p_s and q_s from the current x) and a
 /// global step, the linear system
 ///     (M (1 + h a) + sum_s (h^2 k_s + h c_s) A_s^T A_s) x = M y + h a M (x0 + h w) + sum_s A_s^T (h^2 k_s p_s + h c_s q_s)
@@ -100,7 +100,8 @@ class ProjectiveSolver {
   std::vector<Scalar> held_penalty_;   // per held vertex
   std::vector<int> diagonal_offset_;   // free vertex -> offset of its diagonal entry in a system's values
   std::vector<Vec3> base_, sums_;  // per free vertex: the constant right-hand side, and each pass's
-  std::vector<Vec3> spring_start_;  // per spring: x_i - x_j at the step's start
+  std::vector<Vec3> spring_start_;      // per spring: x_i - x_j at the step's start
+  std::vector<Vec3> spring_direction_;  // and its direction (any, for a spring of zero length)
   Block rhs_, solution_;
   int factorisations_ = 0;
 };

@@ -58,10 +58,11 @@ TEST(Projective, MoreIterationsComeCloserToTheLinearisedReference) {
   const Scalar few = largest_distance(reference, run(hanging(R"({"type": "projective", "iterations": 3, "chebyshev": 0})"), 25));
   const Scalar many =
       largest_distance(reference, run(hanging(R"({"type": "projective", "iterations": 300, "chebyshev": 0})"), 25));
+  const Scalar plain = largest_distance(reference, run(hanging(R"({"type": "projective", "iterations": 10, "chebyshev": 0})"), 25));
   const Scalar accelerated =
       largest_distance(reference, run(hanging(R"({"type": "projective", "iterations": 10, "chebyshev": 0.9})"), 25));
   EXPECT_LT(many, 0.2 * few) << few << " m with 3 iterations, " << many << " m with 300";
-  EXPECT_LT(accelerated, few);
+  EXPECT_LT(accelerated, plain) << "10 iterations: " << plain << " m plain, " << accelerated << " m accelerated";
 }
 
 TEST(Projective, OneFactorisationServesTheWholeRun) {
@@ -70,6 +71,19 @@ TEST(Projective, OneFactorisationServesTheWholeRun) {
   Integrator integrator(model);
   run(model, 100, &integrator);
   EXPECT_EQ(integrator.analyses(), 1);
+}
+
+TEST(Projective, EverySolverRunsAClothWhoseVerticesAreAllPinned) {
+  // Nothing free: an empty system, which CHOLMOD refuses to factorise (it crashed the run).
+  for (const char* solver : {"cholmod", "cg", "projective"}) {
+    const Model model = model_of(std::string(R"({"frame_time": 0.04, "frame_steps": 4,
+      "cloths": [{"grid": {"size": [1, 1], "resolution": [1, 1]}}],
+      "handles": [{"corners": ["top-left", "top-right", "bottom-left", "bottom-right"], "motion": {"velocity": [0, 0, 1]}}],
+      "solver": {"type": ")") + solver + R"("}})");
+    const State state = run(model, 8);
+    for (std::size_t v = 0; v < state.positions.size(); ++v)
+      EXPECT_NEAR(state.positions[v].z(), model.initial_positions[v].z() + state.time, 1e-12) << solver;
+  }
 }
 
 TEST(Projective, HandlesFollowTheirMotionExactly) {
