@@ -3,15 +3,12 @@
 // peak resident memory is its own.
 //
 //   cloth_bench [--steps N] [--sizes 100,200]
-#include <sys/resource.h>
-#include <sys/wait.h>
-#include <unistd.h>
-
 #include <CLI/CLI.hpp>
 #include <chrono>
 #include <cstdio>
 
 #include "drape/ccd/evaluation.h"
+#include "child_process.h"
 #include "drape/core/integrator.h"
 
 using namespace drape;
@@ -62,24 +59,10 @@ Measurement measure_here(int cells, const char* solver, int steps) {
 }
 
 Measurement measure(int cells, const char* solver, int steps) {
-  int channel[2];
-  if (pipe(channel) != 0) return {};
-  const pid_t child = fork();
-  if (child == 0) {
-    close(channel[0]);
-    const Measurement m = measure_here(cells, solver, steps);
-    const ssize_t written = write(channel[1], &m, sizeof m);
-    _exit(written == sizeof m ? 0 : 1);
-  }
-  close(channel[1]);
   Measurement m;
-  const ssize_t got = read(channel[0], &m, sizeof m);
-  close(channel[0]);
-  int status = 0;
-  rusage usage{};
-  wait4(child, &status, 0, &usage);
-  if (got != sizeof m) m.ok = false;
-  m.peak_kib = usage.ru_maxrss;
+  const bench::ChildRun child = bench::run_in_child([&] { return measure_here(cells, solver, steps); }, m);
+  if (!child.returned) m.ok = false;
+  m.peak_kib = child.peak_kib;
   return m;
 }
 

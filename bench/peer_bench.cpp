@@ -14,10 +14,6 @@
 // shares no code with either side's collision handling), the largest stretch of a grid edge.
 //
 //   peer_bench [--cases small,fast,large,large-self] [--solvers projective,cholmod] [--frames 120] [--large-frames 20]
-#include <sys/resource.h>
-#include <sys/wait.h>
-#include <unistd.h>
-
 #include <BulletSoftBody/btSoftBodyHelpers.h>
 #include <BulletSoftBody/btSoftBodyRigidBodyCollisionConfiguration.h>
 #include <BulletSoftBody/btSoftRigidDynamicsWorld.h>
@@ -29,6 +25,7 @@
 #include <cstdio>
 #include <memory>
 
+#include "child_process.h"
 #include "drape/ccd/evaluation.h"
 #include "drape/core/integrator.h"
 #include "drape/core/linear_solver.h"
@@ -225,35 +222,26 @@ Result run_bullet(const Case& c) {
   return result;
 }
 
-// One side in a child process; its peak memory from wait4.
+// One side in a child process; its peak memory its own.
 template <class Run>
 Result in_child(Run run) {
-  int channel[2];
-  if (pipe(channel) != 0) return {};
-  const pid_t child = fork();
-  if (child == 0) {
-    close(channel[0]);
-    Result r;
-    try {
-      r = run();
-    } catch (const std::exception& e) {
-      std::snprintf(r.failure, sizeof r.failure, "%s", e.what());
-    }
-    const ssize_t written = write(channel[1], &r, sizeof r);
-    _exit(written == sizeof r ? 0 : 1);
-  }
-  close(channel[1]);
   Result r;
-  const ssize_t got = read(channel[0], &r, sizeof r);
-  close(channel[0]);
-  int status = 0;
-  rusage usage{};
-  wait4(child, &status, 0, &usage);
-  if (got != sizeof r) {
+  const bench::ChildRun child = bench::run_in_child(
+      [&] {
+        Result out;
+        try {
+          out = run();
+        } catch (const std::exception& e) {
+          std::snprintf(out.failure, sizeof out.failure, "%s", e.what());
+        }
+        return out;
+      },
+      r);
+  if (!child.returned) {
     r = Result{};
-    std::snprintf(r.failure, sizeof r.failure, "the child process died (status %d)", status);
+    std::snprintf(r.failure, sizeof r.failure, "the child process died (status %d)", child.status);
   }
-  r.peak_kib = usage.ru_maxrss;
+  r.peak_kib = child.peak_kib;
   return r;
 }
 

@@ -329,16 +329,7 @@ bool Integrator::solve_projective(State& state, const std::vector<Vec3>& pinned_
   for (std::size_t v = 0; v < n; ++v)
     positions[v] = state.positions[v] + h * (state.velocities[v] + pinned_dv[v]) +
                    (w.free_index[v] >= 0 ? Vec3(h * h / m.masses[v] * w.explicit_forces[v]) : Vec3::Zero());
-  const auto begin = std::chrono::steady_clock::now();
-  std::string error;
-  const bool ok = projective_->solve({h, &state.positions, &w.start_velocities, &w.explicit_forces}, positions, error);
-  report.solve_ms += std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - begin).count();
-  report.solver_iterations += m.scene.solver.iterations;
-  if (!ok) {
-    report.ok = false;
-    report.failure = "the projective solver failed: " + error;
-    return false;
-  }
+  if (!iterate_projective(state.positions, positions, report, "the projective solver failed: ")) return false;
   for (std::size_t v = 0; v < n; ++v)
     state.velocities[v] = w.free_index[v] >= 0 ? Vec3((positions[v] - state.positions[v]) / h)
                                                : Vec3(state.velocities[v] + pinned_dv[v]);
@@ -486,6 +477,22 @@ bool Integrator::spread_response(const std::vector<Vec3>& solved, std::vector<Ve
   return true;
 }
 
+bool Integrator::iterate_projective(const std::vector<Vec3>& start, std::vector<Vec3>& positions, StepReport& report,
+                                    const std::string& failure, const HeldVertices* held) {
+  const Workspace& w = *work_;
+  const auto begin = std::chrono::steady_clock::now();
+  std::string error;
+  const bool ok = projective_->solve({h_, &start, &w.start_velocities, &w.explicit_forces}, positions, error, held,
+                                     RESPONSE_HOLD);
+  report.solve_ms += std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - begin).count();
+  report.solver_iterations += model_.scene.solver.iterations;
+  if (!ok) {
+    report.ok = false;
+    report.failure = failure + error;
+  }
+  return ok;
+}
+
 bool Integrator::spread_projective(const std::vector<Vec3>& start, const std::vector<Vec3>& solved,
                                    std::vector<Vec3>& motion, std::vector<Vec3>& velocities, StepReport& report) {
   const Model& m = model_;
@@ -503,17 +510,9 @@ bool Integrator::spread_projective(const std::vector<Vec3>& start, const std::ve
     for (std::size_t v = 0; v < n; ++v) positions[v] = start[v] + h * result[v];
     held.targets.clear();
     for (int v : held.vertices) held.targets.push_back(positions[std::size_t(v)]);
-    const auto begin = std::chrono::steady_clock::now();
-    std::string error;
-    const bool ok = projective_->solve({h, &start, &w.start_velocities, &w.explicit_forces}, positions, error,
-                                       &held, RESPONSE_HOLD);
-    report.solve_ms += std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - begin).count();
-    report.solver_iterations += m.scene.solver.iterations;
-    if (!ok) {
-      report.ok = false;
-      report.failure = "the projective solver failed spreading the collision response: " + error;
+    if (!iterate_projective(start, positions, report, "the projective solver failed spreading the collision response: ",
+                            &held))
       return false;
-    }
     for (std::size_t v = 0; v < n; ++v)
       if (w.free_index[v] >= 0) result[v] = (positions[v] - start[v]) / h;
     return true;

@@ -57,6 +57,7 @@ struct StepReport {
 Scalar energy_scale(const Model& model);
 
 class ProjectiveSolver;
+struct HeldVertices;
 
 /// Holds what a run reuses from step to step: for the linearised solve, the system's sparsity
 /// pattern with each spring's place in it and the linear solver (whose symbolic analysis
@@ -96,6 +97,11 @@ class Integrator {
   // The projective solver's step from the state: its velocities advanced (the pinned ones by
   // pinned_dv); the handles' springs' forces added to the workspace's forces for the ledger.
   bool solve_projective(State& state, const std::vector<Vec3>& pinned_dv, StepReport& report);
+  // The projective solver's iterations for this step from start (positions: first guess in,
+  // end of the step out), with held vertices when given; timed into report, which says why
+  // (failure, then the reason) when they fail.
+  bool iterate_projective(const std::vector<Vec3>& start, std::vector<Vec3>& positions, StepReport& report,
+                          const std::string& failure, const HeldVertices* held = nullptr);
   // spread_response's counterpart for the projective solver: the step solved again with the
   // contact vertices held to their new end positions (the motion), then to where their new
   // velocities would take them (the velocities); start is the step's start.
