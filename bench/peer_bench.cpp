@@ -115,9 +115,8 @@ void summarise(const std::vector<double>& falling, const std::vector<double>& co
   result.contact_ms = contact.empty() ? 0 : ccd::median(contact);
 }
 
-// The check's model for a side: the scene's grid, with the side's own triangles.
-Model check_model(const Case& c) {
-  Model model = build_model(parse_scene(scene_json(c, "cholmod"), "peer.json"));
+// The check's model for a side: the scene's cloth without its obstacles (the Bullet side puts its own triangles in).
+Model check_model(Model model) {
   model.obstacles.clear();  // the check here is cloth against cloth; vertices are counted above
   return model;
 }
@@ -125,7 +124,7 @@ Model check_model(const Case& c) {
 Result run_drape(const Case& c, const std::string& solver) {
   Result result;
   const Model model = build_model(parse_scene(scene_json(c, solver), "peer.json"));
-  const Model check = check_model(c);
+  const Model check = check_model(model);
   State state = initial_state(model);
   Integrator integrator(model);
   std::vector<double> falling, contact, solve;
@@ -191,7 +190,7 @@ Result run_bullet(const Case& c) {
   world.addSoftBody(cloth);
 
   // The check's model with Bullet's own triangles (its patch alternates its diagonals).
-  Model check = check_model(c);
+  Model check = check_model(build_model(parse_scene(scene_json(c, "cholmod"), "peer.json")));
   check.triangles.clear();
   const btSoftBody::Node* first = &cloth->m_nodes[0];
   for (int f = 0; f < cloth->m_faces.size(); ++f) {

@@ -87,6 +87,7 @@ struct CholmodFactor::Impl {
   }
   Eigen::CholmodDecomposition<SparseMatrix, Eigen::Lower> llt;
   int analyses = 0;
+  bool empty = false;  // the last matrix had no rows
   Eigen::Index rows = 0, nonzeros = 0;
   std::vector<SparseMatrix::StorageIndex> outer, inner;
 };
@@ -98,8 +99,8 @@ CholmodFactor& CholmodFactor::operator=(CholmodFactor&&) noexcept = default;
 
 bool CholmodFactor::factorise(const SparseMatrix& A) {
   Impl& f = *impl_;
-  f.rows = A.rows();
-  if (A.rows() == 0) return true;  // nothing free (every vertex pinned): CHOLMOD refuses an empty matrix
+  f.empty = A.rows() == 0;
+  if (f.empty) return true;  // nothing free (every vertex pinned): CHOLMOD refuses an empty matrix
   if (!f.same_pattern(A)) {
     const bool supernodal = use_ == Use::Refactorised && A.rows() >= SUPERNODAL_MIN_ROWS;
     f.llt.setMode(supernodal ? Eigen::CholmodSupernodalLLt : Eigen::CholmodSimplicialLLt);
@@ -113,7 +114,7 @@ bool CholmodFactor::factorise(const SparseMatrix& A) {
 
 bool CholmodFactor::solve(const Eigen::Matrix<Scalar, Eigen::Dynamic, 3>& B,
                           Eigen::Matrix<Scalar, Eigen::Dynamic, 3>& X) const {
-  if (impl_->rows == 0) {
+  if (impl_->empty) {
     X.resize(0, 3);
     return true;
   }
@@ -122,7 +123,7 @@ bool CholmodFactor::solve(const Eigen::Matrix<Scalar, Eigen::Dynamic, 3>& B,
 }
 
 bool CholmodFactor::solve(const VectorX& b, VectorX& x) const {
-  if (impl_->rows == 0) {
+  if (impl_->empty) {
     x.resize(0);
     return true;
   }

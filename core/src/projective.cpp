@@ -13,6 +13,7 @@ ProjectiveSolver::ProjectiveSolver(const Model& model, std::vector<int> free_ind
       rho_(model.scene.solver.chebyshev) {
   base_.assign(std::size_t(free_count_), Vec3::Zero());
   sums_ = base_;
+  predicted_ = base_;
   rhs_.setZero(free_count_, 3);
   solution_.setZero(free_count_, 3);
 }
@@ -53,7 +54,6 @@ ProjectiveSolver::System* ProjectiveSolver::system(Scalar h, std::string& error)
     error = "CHOLMOD could not factorise the projective system (not positive definite)";
     return nullptr;
   }
-  ++factorisations_;
   return &systems_.emplace(h, std::move(sys)).first->second;
 }
 
@@ -81,6 +81,7 @@ bool ProjectiveSolver::solve(const ProjectiveStep& step, std::vector<Vec3>& posi
     const Scalar mass = m.masses[v];
     const Vec3 inertial = mass * (x0[v] + h * (*step.velocities)[v]) + h * h * (*step.forces)[v];
     base_[std::size_t(a)] = inertial + h * m.air_damping[v] * mass * (x0[v] + h * wind);
+    predicted_[std::size_t(a)] = x0[v] + h * (*step.velocities)[v] + h * h / mass * (*step.forces)[v];
   }
   if (held && !held->vertices.empty()) {
     HeldKey key{h, hold, held->vertices};
@@ -98,7 +99,6 @@ bool ProjectiveSolver::solve(const ProjectiveStep& step, std::vector<Vec3>& posi
         error = "CHOLMOD could not factorise the projective system with the collision response held";
         return false;
       }
-      ++factorisations_;
       held_key_ = std::move(key);
     }
     for (std::size_t k = 0; k < held->vertices.size(); ++k)
@@ -114,8 +114,8 @@ bool ProjectiveSolver::solve(const ProjectiveStep& step, std::vector<Vec3>& posi
       const int a = free_index_[v];
       if (a < 0) continue;
       const Scalar mass = m.masses[v];
-      const Vec3 y = x0[v] + h * (*step.velocities)[v] + h * h / mass * (*step.forces)[v];
-      total += 0.5 * mass * (x[v] - y).squaredNorm() + 0.5 * h * m.air_damping[v] * mass * (x[v] - x0[v] - h * wind).squaredNorm();
+      total += 0.5 * mass * (x[v] - predicted_[std::size_t(a)]).squaredNorm() +
+               0.5 * h * m.air_damping[v] * mass * (x[v] - x0[v] - h * wind).squaredNorm();
     }
     if (held)
       for (std::size_t k = 0; k < held->vertices.size(); ++k)
@@ -166,7 +166,6 @@ bool ProjectiveSolver::solve(const ProjectiveStep& step, std::vector<Vec3>& posi
       previous_ = positions;
       current_ = positions;
       accelerated = 0;
-      ++restarts_;
       continue;  // the local step again, at the best iterate
     }
     if (pass == iterations_) break;  // the last pass only weighs the last iterate

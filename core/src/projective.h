@@ -59,10 +59,6 @@ class ProjectiveSolver {
              const HeldVertices* held = nullptr, Scalar hold = 0);
   /// Symbolic analyses run: one per distinct system (step sizes, held solves share one).
   int analyses() const;
-  /// Numeric factorisations run.
-  int factorisations() const { return factorisations_; }
-  /// Accelerated iterations undone because they raised the objective.
-  long restarts() const { return restarts_; }
 
  private:
   using Block = Eigen::Matrix<Scalar, Eigen::Dynamic, 3>;
@@ -88,7 +84,6 @@ class ProjectiveSolver {
   Scalar rho_ = 0;                     // Chebyshev's spectral radius estimate, 0: no acceleration
   std::vector<Vec3> previous_, current_;  // the last two iterates
   std::vector<Vec3> best_;                // the iterate with the least objective so far
-  long restarts_ = 0;
   std::map<Scalar, System> systems_;  // by step size: the scene's and its halvings
   CholmodFactor held_factor_;  // the step's system with the held vertices' penalty (factorised every step with contacts)
   SparseMatrix held_matrix_;
@@ -100,10 +95,10 @@ class ProjectiveSolver {
   std::vector<Scalar> held_penalty_;   // per held vertex
   std::vector<int> diagonal_offset_;   // free vertex -> offset of its diagonal entry in a system's values
   std::vector<Vec3> base_, sums_;  // per free vertex: the constant right-hand side, and each pass's
+  std::vector<Vec3> predicted_;    // per free vertex: the inertial prediction y
   std::vector<Vec3> spring_start_;      // per spring: x_i - x_j at the step's start
   std::vector<Vec3> spring_direction_;  // and its direction (any, for a spring of zero length)
   Block rhs_, solution_;
-  int factorisations_ = 0;
 };
 
 }  // namespace drape

@@ -9,6 +9,7 @@
 #include <cstdio>
 #include <fstream>
 #include <iterator>
+#include <optional>
 #include <sstream>
 #include <stdexcept>
 
@@ -44,6 +45,23 @@ std::vector<SweepSetting> SweepGrid::settings() const {
   return out;
 }
 
+namespace {
+
+// The number that is the whole of text, or nothing.
+std::optional<double> whole_number(const std::string& text) {
+  std::size_t used = 0;
+  double value = 0;
+  try {
+    value = std::stod(text, &used);
+  } catch (const std::exception&) {
+    return std::nullopt;
+  }
+  if (used != text.size()) return std::nullopt;
+  return value;
+}
+
+}  // namespace
+
 SolverSpec parse_solver_setting(const std::string& text, const SolverSpec& scene_default) {
   SolverSpec spec = scene_default;
   if (text == "cholmod") {
@@ -53,16 +71,10 @@ SolverSpec parse_solver_setting(const std::string& text, const SolverSpec& scene
   if (text == "cg" || text.rfind("cg:", 0) == 0) {
     spec.kind = SolverKind::ConjugateGradient;
     if (text != "cg") {
-      std::size_t used = 0;
-      double tolerance = 0;
-      try {
-        tolerance = std::stod(text.substr(3), &used);
-      } catch (const std::exception&) {
-        used = 0;
-      }
-      if (used != text.size() - 3 || !(tolerance >= 1e-16 && tolerance <= 1))
+      const auto tolerance = whole_number(text.substr(3));
+      if (!tolerance || !(*tolerance >= 1e-16 && *tolerance <= 1))
         throw std::invalid_argument("'" + text + "': expected cg:TOLERANCE with a tolerance from 1e-16 to 1");
-      spec.tolerance = tolerance;
+      spec.tolerance = *tolerance;
     }
     return spec;
   }
@@ -75,18 +87,11 @@ SolverSpec parse_solver_setting(const std::string& text, const SolverSpec& scene
     std::getline(fields, field, ':');  // empty: before the first colon
     int index = 0;
     while (std::getline(fields, field, ':')) {
-      std::size_t used = 0;
-      double value = 0;
-      try {
-        value = std::stod(field, &used);
-      } catch (const std::exception&) {
-        used = 0;
-      }
-      const bool whole = used == field.size() && !field.empty();
-      if (index == 0 && whole && value >= 1 && value <= MAX_PROJECTIVE_ITERATIONS && value == std::floor(value))
-        spec.iterations = int(value);
-      else if (index == 1 && whole && value >= 0 && value <= MAX_CHEBYSHEV_RHO)
-        spec.chebyshev = value;
+      const auto value = whole_number(field);
+      if (index == 0 && value && *value >= 1 && *value <= MAX_PROJECTIVE_ITERATIONS && *value == std::floor(*value))
+        spec.iterations = int(*value);
+      else if (index == 1 && value && *value >= 0 && *value <= MAX_CHEBYSHEV_RHO)
+        spec.chebyshev = *value;
       else
         throw std::invalid_argument("'" + text + expected);
       ++index;
