@@ -1,8 +1,11 @@
 #include "drape/core/collision.h"
 
+#include <algorithm>
 #include <chrono>
+#include <cmath>
 #include <cstdio>
 #include <limits>
+#include <map>
 #include <numeric>
 
 #include "drape/ccd/broad_phase.h"
@@ -51,6 +54,18 @@ bool CollisionPipeline::needed(const Model& model) {
 }
 
 namespace {
+
+// Two directions from a cloth vertex to an obstacle closer than this cosine are one contact
+// of the implicit solve (mesh_contacts): the nearest of them is kept.
+constexpr Scalar SAME_DIRECTION = 0.95;
+// An edge-edge or obstacle-vertex contact of the implicit solve is kept only when its closest
+// points lie inside both features by more than this weight; otherwise it is a cloth vertex's
+// contact with an obstacle's triangle, found as such.
+constexpr Scalar INNER_WEIGHT = 0.01;
+// The simultaneous impulses of a round (Impl::impulses): at most this many Gauss-Seidel sweeps,
+// fewer once no impulse changes by more than IMPULSE_TOLERANCE times the separation speed.
+constexpr int IMPULSE_SWEEPS = 100;
+constexpr Scalar IMPULSE_TOLERANCE = 1e-3;
 
 using Clock = std::chrono::steady_clock;
 double ms_since(Clock::time_point begin) { return std::chrono::duration<double, std::milli>(Clock::now() - begin).count(); }
@@ -165,22 +180,76 @@ struct CollisionPipeline::Impl {
     return relative;
   }
 
-  // Applies the impulse that brings the contact's normal relative velocity up to target, and
-  // Coulomb friction: the relative tangential velocity shrinks by friction times the normal
-  // velocity change, never reversing (Bridson, Fedkiw and Anderson 2002, section 7.2).
-  bool impulse(const Contact& c, Scalar target, Scalar h, std::vector<Vec3>& motion) const {
-    const Vec3 relative = relative_velocity(c, h, motion);
-    Scalar denominator = 0;
-    for (int k = 0; k < 4; ++k) denominator += c.weight[k] * c.weight[k] * inverse_mass[c.vertex[k]];
-    const Scalar normal_speed = relative.dot(c.normal);
-    if (normal_speed >= target || !(denominator > 0)) return false;
-    const Vec3 tangential = relative - normal_speed * c.normal;
-    const Scalar slide = tangential.norm();
-    Vec3 change = (target - normal_speed) * c.normal;  // wanted change of the relative velocity
-    if (slide > 0) change -= std::min(model.scene.friction * (target - normal_speed), slide) * tangential / slide;
-    for (int k = 0; k < 4; ++k)
-      if (c.vertex[k] < cloth_vertices) motion[c.vertex[k]] += c.weight[k] * inverse_mass[c.vertex[k]] / denominator * change;
-    return true;
+  // The contacts of a step's response so far, each with the least relative normal velocity it
+  // asks for (its target), the impulse it has applied (as the change of its own relative
+  // normal velocity) and the tangential change its friction has made.
+  struct ContactSet {
+    std::vector<Contact> contacts;
+    std::vector<Scalar> target, pushed, rubbed, denominator;
+    std::map<std::array<int, 4>, std::size_t> index;
+    // Adds a contact, or renews one found before (its impulse so far kept, the larger target).
+    void add(const Contact& c, Scalar target_c, const std::vector<Scalar>& inverse_mass) {
+      const auto [place, added] = index.emplace(c.vertex, contacts.size());
+      if (!added) {
+        contacts[place->second] = c;
+        target[place->second] = std::max(target[place->second], target_c);
+        return;
+      }
+      contacts.push_back(c);
+      target.push_back(target_c);
+      pushed.push_back(0);
+      rubbed.push_back(0);
+      Scalar d = 0;
+      for (int k = 0; k < 4; ++k) d += c.weight[k] * c.weight[k] * inverse_mass[c.vertex[k]];
+      denominator.push_back(d);
+    }
+  };
+
+  // The inelastic impulses of all the contacts so far, solved together (each a change of its
+  // relative normal velocity, shared among its vertices by inverse mass and weight, Bridson,
+  // Fedkiw and Anderson 2002, section 7.2): projected Gauss-Seidel over accumulated impulses
+  // that never turn negative, so that a later contact, of this round or a later one, may take
+  // back what an earlier one overdid (applied one after another, contacts of one edge with a
+  // triangulated leg sent its vertex back at nearly its approach speed). Then Coulomb friction:
+  // each contact's relative tangential velocity shrinks by friction times its normal impulse in
+  // all, never reversing. Returns how many contacts push.
+  int impulses(ContactSet& set, Scalar h, std::vector<Vec3>& motion) const {
+    const auto apply = [&](std::size_t i, const Vec3& change) {
+      const Contact& c = set.contacts[i];
+      for (int k = 0; k < 4; ++k)
+        if (c.vertex[k] < cloth_vertices) motion[c.vertex[k]] += c.weight[k] * inverse_mass[c.vertex[k]] / set.denominator[i] * change;
+    };
+    const Scalar tolerance = IMPULSE_TOLERANCE * model.scene.collisions.thickness / h;
+    for (int sweep = 0; sweep < IMPULSE_SWEEPS; ++sweep) {
+      Scalar largest = 0;
+      for (std::size_t i = 0; i < set.contacts.size(); ++i) {
+        if (!(set.denominator[i] > 0)) continue;
+        const Contact& c = set.contacts[i];
+        const Scalar change = std::max<Scalar>(-set.pushed[i], set.target[i] - relative_velocity(c, h, motion).dot(c.normal));
+        // A contact starts pushing only for an approach beyond the tolerance: a resting contact
+        // that the solve held approaches by rounding, and an impulse there would set off the
+        // response's re-solve for nothing.
+        if (change == 0 || (set.pushed[i] == 0 && change < tolerance)) continue;
+        set.pushed[i] += change;
+        largest = std::max(largest, std::abs(change));
+        apply(i, change * c.normal);
+      }
+      if (!(largest > tolerance)) break;
+    }
+    int count = 0;
+    for (std::size_t i = 0; i < set.contacts.size(); ++i) {
+      if (!(set.pushed[i] > 0)) continue;
+      ++count;
+      const Contact& c = set.contacts[i];
+      const Vec3 relative = relative_velocity(c, h, motion);
+      const Vec3 tangential = relative - relative.dot(c.normal) * c.normal;
+      const Scalar slide = tangential.norm();
+      const Scalar rub = std::min(model.scene.friction * set.pushed[i] - set.rubbed[i], slide);
+      if (!(rub > 0)) continue;
+      set.rubbed[i] += rub;
+      apply(i, -rub * tangential / slide);
+    }
+    return count;
   }
 
   // The contact of a vertex-face or edge-edge pair: weights from the closest points at time s
@@ -288,10 +357,10 @@ struct CollisionPipeline::Impl {
 
   // Proximity repulsion (Bridson, Fedkiw and Anderson 2002, section 7.2: its inelastic impulse,
   // without the spring push that follows): features closer than their kept gap at the start
-  // that approach each other get the impulse that stops the approach, and no more. Never a
-  // separating velocity: the normal kinetic energy only falls, and a resting or freely falling
-  // cloth gets none.
-  void repel(const ccd::Candidates& c, Scalar h, std::vector<Vec3>& motion, CollisionCounters& counters) {
+  // get, all together, the impulses that stop their approach, and no more. Never a separating
+  // velocity: the normal kinetic energy only falls, and a resting or freely falling cloth gets
+  // none.
+  void repel(const ccd::Candidates& c, Scalar h, std::vector<Vec3>& motion, ContactSet& set, CollisionCounters& counters) {
     const Scalar thickness = model.scene.collisions.thickness;
     const auto push = [&](bool vertex_face, Contact contact, const Vec3& offset) {
       const Scalar distance = offset.norm();
@@ -299,8 +368,7 @@ struct CollisionPipeline::Impl {
       const Scalar gap = kept_gap(vertex_face, contact.vertex, counters);
       if (!(distance < gap)) return;
       contact.normal = offset / distance;
-      if (!(relative_velocity(contact, h, motion).dot(contact.normal) < 0)) return;  // not approaching
-      if (impulse(contact, 0, h, motion)) ++counters.proximity_impulses;
+      set.add(contact, 0, inverse_mass);
     };
     for (const auto& p : c.vertex_face) {
       const auto closest = ccd::closest_point_triangle<Scalar>(start[p.vertex], start[p.face[0]], start[p.face[1]], start[p.face[2]]);
@@ -316,6 +384,7 @@ struct CollisionPipeline::Impl {
       contact.weight = {1 - closest.s, closest.s, -(1 - closest.u), -closest.u};
       push(false, contact, closest.point_a - closest.point_b);
     }
+    counters.proximity_impulses += impulses(set, h, motion);
   }
 
   // Rigid impact zones: each zone's cloth vertices move with the zone's rigid motion (its
@@ -370,6 +439,96 @@ void CollisionPipeline::set_observer(Observer observer) {
   impl_->observer = std::move(observer);
 }
 
+std::vector<SolveContact> CollisionPipeline::mesh_contacts(const std::vector<Vec3>& start, Scalar t, Scalar h,
+                                                           Scalar reach) {
+  Impl& m = *impl_;
+  std::vector<SolveContact> out;
+  if (m.obstacles.empty()) return out;
+  for (int v = 0; v < m.cloth_vertices; ++v) m.start[v] = m.end[v] = start[v];
+  m.boxes.resize(m.cloth_triangles.size());
+  for (std::size_t i = 0; i < m.cloth_triangles.size(); ++i) m.boxes[i] = ccd::swept_box(m.cloth_triangles[i], m.start, m.end, reach);
+  m.cloth_tree.update(m.boxes);
+  // Per cloth feature (its vertices), its nearest obstacle points in distinct directions.
+  std::map<std::array<int, 3>, std::vector<std::pair<Scalar, SolveContact>>> near;
+  const auto free = [&](int v) { return v < m.cloth_vertices && m.inverse_mass[std::size_t(v)] > 0; };
+  const auto velocity = [&](int v) -> Vec3 { return (m.end[v] - m.start[v]) / h; };
+  // offset: from the obstacle's point to the cloth's; obstacle_velocity: of the obstacle's point.
+  const auto add = [&](SolveContact contact, const Vec3& offset, const Vec3& obstacle_velocity) {
+    const Scalar distance = offset.norm();
+    if (!(distance < reach) || !(distance > 0)) return;
+    contact.normal = offset / distance;
+    contact.surface_velocity = obstacle_velocity;
+    contact.target = contact.normal.dot(obstacle_velocity);
+    std::array<int, 3> key = contact.vertex;
+    std::sort(key.begin(), key.end());
+    auto& list = near[key];
+    for (auto& [d, known] : list)
+      if (known.normal.dot(contact.normal) > SAME_DIRECTION) {
+        if (distance < d) d = distance, known = contact;
+        return;
+      }
+    list.emplace_back(distance, contact);
+  };
+  const auto inner = [](Scalar w) { return w > INNER_WEIGHT && w < 1 - INNER_WEIGHT; };
+  for (Impl::MeshObstacle& mo : m.obstacles) {
+    const auto now = posed_vertices(*mo.obstacle, t), next = posed_vertices(*mo.obstacle, t + h);
+    std::copy(now.begin(), now.end(), m.start.begin() + mo.first_vertex);
+    std::copy(next.begin(), next.end(), m.end.begin() + mo.first_vertex);
+    std::vector<ccd::Aabb> obstacle_boxes(mo.triangles.size());
+    for (std::size_t i = 0; i < mo.triangles.size(); ++i) obstacle_boxes[i] = ccd::swept_box(mo.triangles[i], m.start, m.end, 0);
+    mo.tree.update(obstacle_boxes);
+    const ccd::Candidates c = ccd::feature_pairs(m.cloth_triangles, mo.triangles, m.cloth_tree.pairs_with(mo.tree));
+    const auto& x = m.start;
+    for (const auto& p : c.vertex_face) {
+      const auto& f = p.face;
+      const auto closest = ccd::closest_point_triangle<Scalar>(x[p.vertex], x[f[0]], x[f[1]], x[f[2]]);
+      const Scalar wb = closest.weight_b, wc = closest.weight_c, wa = 1 - wb - wc;
+      SolveContact contact;
+      if (free(p.vertex)) {  // a cloth vertex and an obstacle's triangle
+        contact.vertex = {p.vertex, -1, -1};
+        contact.weight = {1, 0, 0};
+        add(contact, x[p.vertex] - closest.point, wa * velocity(f[0]) + wb * velocity(f[1]) + wc * velocity(f[2]));
+      } else if (p.vertex >= m.cloth_vertices && free(f[0]) && free(f[1]) && free(f[2]) && inner(wa) && inner(wb) &&
+                 inner(wc)) {  // an obstacle's vertex and a cloth triangle
+        contact.vertex = {f[0], f[1], f[2]};
+        contact.weight = {wa, wb, wc};
+        contact.count = 3;
+        add(contact, closest.point - x[p.vertex], velocity(p.vertex));
+      }
+    }
+    for (const auto& p : c.edge_edge) {  // edge_a is the cloth's (its indices are the smaller)
+      if (!free(p.edge_a[0]) || !free(p.edge_a[1]) || p.edge_b[0] < m.cloth_vertices) continue;
+      const auto closest = ccd::closest_segment_segment<Scalar>(x[p.edge_a[0]], x[p.edge_a[1]], x[p.edge_b[0]], x[p.edge_b[1]]);
+      if (!inner(closest.s) || !inner(closest.u)) continue;  // a vertex's contact, found as such
+      SolveContact contact;
+      contact.vertex = {p.edge_a[0], p.edge_a[1], -1};
+      contact.weight = {1 - closest.s, closest.s, 0};
+      contact.count = 2;
+      add(contact, closest.point_a - closest.point_b,
+          (1 - closest.u) * velocity(p.edge_b[0]) + closest.u * velocity(p.edge_b[1]));
+    }
+  }
+  // An edge's or triangle's contact whose every vertex has its own contact in that direction
+  // would over-determine the solve (penalties with different targets fighting): dropped.
+  std::map<int, std::vector<Vec3>> vertex_normals;
+  for (const auto& [key, list] : near)
+    for (const auto& [d, contact] : list)
+      if (contact.count == 1) vertex_normals[contact.vertex[0]].push_back(contact.normal);
+  const auto has_own = [&](int v, const Vec3& normal) {
+    const auto found = vertex_normals.find(v);
+    if (found == vertex_normals.end()) return false;
+    return std::any_of(found->second.begin(), found->second.end(),
+                       [&](const Vec3& n) { return n.dot(normal) > SAME_DIRECTION; });
+  };
+  for (const auto& [key, list] : near)
+    for (const auto& [d, contact] : list) {
+      bool covered = contact.count > 1;
+      for (int i = 0; i < contact.count && covered; ++i) covered = has_own(contact.vertex[i], contact.normal);
+      if (!covered) out.push_back(contact);
+    }
+  return out;
+}
+
 CollisionCounters CollisionPipeline::resolve(const std::vector<Vec3>& start, Scalar t, Scalar h, std::vector<Vec3>& motion) {
   Impl& m = *impl_;
   CollisionCounters counters;
@@ -385,12 +544,14 @@ CollisionCounters CollisionPipeline::resolve(const std::vector<Vec3>& start, Sca
   // Proximity repulsion on the first round's candidates, then CCD impulses until no collision.
   ccd::Candidates first;
   auto hits = m.detect(h, motion, counters, &first);
-  m.repel(first, h, motion, counters);
+  Impl::ContactSet contacts;
+  m.repel(first, h, motion, contacts, counters);
   m.keep_out_of_analytic_obstacles(t + h, h, motion);
   hits = m.detect(h, motion, counters);
   for (int round = 0; !hits.empty() && round < m.settings.max_impulse_iterations; ++round) {
     ++counters.impulse_iterations;
-    for (const auto& [contact, toc] : hits) m.impulse(contact, separation, h, motion);
+    for (const auto& [contact, toc] : hits) contacts.add(contact, separation, m.inverse_mass);
+    m.impulses(contacts, h, motion);
     m.keep_out_of_analytic_obstacles(t + h, h, motion);
     hits = m.detect(h, motion, counters);
   }

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <optional>
 
 #include "drape/core/obstacle.h"
 #include "projective.h"
@@ -22,6 +23,17 @@ State initial_state(const Model& model) {
 // the response is spread through the implicit system: its diagonal block's largest entry times
 // this, added to the block, so it follows its target to about 1 / RESPONSE_HOLD of its change.
 constexpr Scalar RESPONSE_HOLD = 1e8;
+// The linearised solve holds a cloth vertex against an obstacle (Integrator::find_contacts) when
+// it starts within this many thicknesses of it: a little more than one, since the response
+// leaves a resting vertex at the thickness.
+constexpr Scalar CONTACT_REACH = 1.1;
+// A change of the step's motion smaller than this fraction of the thickness is negligible: a
+// vertex the response moved by less is not held for the re-solve, and a held contact that would
+// pull its vertex by less is not released (Integrator::advance, solve_linearised).
+constexpr Scalar NEGLIGIBLE_MOTION = 1e-2;
+// m/s: a contact vertex slipping slower than this across its obstacle sticks (the friction in
+// Integrator::solve_linearised).
+constexpr Scalar FRICTION_SLIP = 1e-4;
 
 // A step may end with at most this fraction of the scene's energy scale (energy_scale) more
 // than it started with, plus the sources' work; beyond it the step is taken again in 2, 4, ...
@@ -43,6 +55,13 @@ struct Integrator::Workspace {
   // The projective step's start velocities and explicit forces (gravity, wind), kept for the
   // response's spread.
   std::vector<Vec3> start_velocities, explicit_forces;
+  // The contacts the linearised solve keeps, and the impulse (N s, along the normal) each
+  // applied; zero for the ones released.
+  std::vector<SolveContact> contacts;
+  std::vector<std::array<std::array<std::array<int, 3>, 3>, 3>> contact_blocks;  // [contact][i][j]: block (vertex i, vertex j)
+  std::vector<Scalar> contact_holds, contact_impulses;
+  std::vector<Scalar> scale;  // per free vertex: its diagonal block's largest entry before penalties
+  std::vector<Scalar> normal_force;  // per vertex, N: what its contacts pushed with in the last solve
 
   std::array<int, 3> block(int a, int b) const {
     std::array<int, 3> offsets{};
@@ -53,6 +72,15 @@ struct Integrator::Workspace {
       offsets[c] = int(std::lower_bound(begin, end, 3 * a) - matrix.innerIndexPtr());
     }
     return offsets;
+  }
+  // The offsets of block (a, b) when the pattern holds it.
+  std::optional<std::array<int, 3>> find_block(int a, int b) const {
+    const int column = 3 * b;
+    const auto* begin = matrix.innerIndexPtr() + matrix.outerIndexPtr()[column];
+    const auto* end = matrix.innerIndexPtr() + matrix.outerIndexPtr()[column + 1];
+    const auto* found = std::lower_bound(begin, end, 3 * a);
+    if (found == end || *found != 3 * a) return std::nullopt;
+    return block(a, b);
   }
   void add_block(const std::array<int, 3>& offsets, const Mat3& value) {
     Scalar* values = matrix.valuePtr();
@@ -72,6 +100,7 @@ Integrator::Integrator(const Model& model, int threads) : model_(model), work_(s
   Workspace& w = *work_;
   const int n = int(model.vertex_count());
   w.free_index.assign(n, -1);
+  w.normal_force.assign(std::size_t(n), 0);
   for (int v = 0; v < n; ++v)
     if (model.pin_of_vertex[v] < 0) w.free_index[v] = w.free_count++;
   energy_tolerance_ = STEP_ENERGY_TOLERANCE * energy_scale(model);
@@ -197,12 +226,18 @@ StepReport Integrator::advance(State& state) {
   for (int v = 0; v < n; ++v)
     w.forces[v] = m.masses[v] * m.scene.gravity - m.air_damping[v] * m.masses[v] * (state.velocities[v] - air_velocity);
   if (m.scene.wind) add_wind(m, state, w.forces);
+  // The explicit forces (gravity and the wind's drag; the air's damping is implicit) and the
+  // start velocities: the solvers' and the response's re-solve.
+  w.explicit_forces = w.forces;
+  for (int v = 0; v < n; ++v) w.explicit_forces[v] += m.air_damping[v] * m.masses[v] * (state.velocities[v] - air_velocity);
+  w.start_velocities = state.velocities;
   // With wind, the air's forces may put energy in: kept apart for the step's energy ledger.
   std::vector<Vec3> air_forces;
   if (m.scene.wind) {
     air_forces = w.forces;
     for (int v = 0; v < n; ++v) air_forces[v] -= m.masses[v] * m.scene.gravity;
   }
+  if (!projective_) find_contacts(state);
   if (!(projective_ ? solve_projective(state, pinned_dv, report) : solve_linearised(state, pinned_dv, report)))
     return report;
   report.external_work = source_work(pinned_dv, air_forces, state.velocities);
@@ -214,22 +249,30 @@ StepReport Integrator::advance(State& state) {
   // obstacles' projection out of the thickness, which is motion only.
   std::vector<Vec3> motion = state.velocities;
   const std::vector<Vec3> solved = motion;
-  respond(state, motion, report);
   // The response changes only the contact vertices; their neighbours keep the velocities the
   // solve gave them for a different motion of those vertices, and against stiff springs that
-  // mismatch becomes strain (on a mesh obstacle's rim, or where a cloth lands on the ground,
-  // energy grew). So the change is spread through the implicit system: solved again with the
-  // contact vertices held (a penalty) to their new motion and velocity, then the response runs
-  // once more on the result. Motion and velocity are spread apart: an analytic obstacle's
-  // projection out of the thickness moves its vertex without giving it speed, and spread into
-  // the neighbours' velocities it became energy (drape_sphere's landing: 4.5 J to 11.7 J).
-  if (projective_ ? spread_projective(state.positions, solved, motion, state.velocities, report)
-                  : spread_response(solved, motion, state.velocities, report)) {
+  // mismatch becomes strain (on a mesh obstacle's rim, or where a cloth's flap hits a table's
+  // leg, energy grew). So the change is spread through the implicit system: solved again with
+  // the contact vertices held (a penalty) to their new motion and velocity, then the response
+  // runs once more on the result. Motion and velocity are held apart: an analytic
+  // obstacle's projection out of the thickness moves its vertex without giving it speed, and
+  // spread into the neighbours' velocities it became energy (drape_sphere's landing: 4.5 J to
+  // 11.7 J).
+  respond(state, motion, report);
+  std::vector<char> held(std::size_t(n), 0);
+  bool changed = false;
+  const Scalar negligible = NEGLIGIBLE_MOTION * m.scene.collisions.thickness;  // a change within the step, m
+  for (int v = 0; v < n; ++v)
+    if (w.free_index[v] >= 0 && h * std::max((motion[v] - solved[v]).norm(), (state.velocities[v] - solved[v]).norm()) > negligible)
+      held[std::size_t(v)] = 1, changed = true;
+  const int first_contacts = report.obstacle_contacts;
+  if (changed) {
+    if (projective_) spread_projective(state.positions, solved, motion, state.velocities, report);
+    else spread_response(state.positions, solved, held, motion, state.velocities, report);
     if (!report.ok) return report;
-    const int first_contacts = report.obstacle_contacts;
     respond(state, motion, report);
-    report.obstacle_contacts = first_contacts;
   }
+  report.obstacle_contacts = first_contacts;
   if (obstacles_move) report.external_work += std::max<Scalar>(0, kinetic_energy(m, state) - kinetic_before_response);
   for (int v = 0; v < n; ++v) state.positions[v] += h * motion[v];
   state.time = t_next;
@@ -251,6 +294,93 @@ StepReport Integrator::advance(State& state) {
   return report;
 }
 
+void Integrator::assemble(const std::vector<Vec3>& x, const std::vector<Vec3>& v, std::vector<Vec3>& forces,
+                          std::vector<Vec3>* stiffness_times_v, const std::vector<Vec3>* pinned_dv,
+                          std::vector<Vec3>* coupling) {
+  const Model& m = model_;
+  Workspace& w = *work_;
+  const Scalar h = h_;
+  const int n = int(m.vertex_count());
+  std::fill(w.matrix.valuePtr(), w.matrix.valuePtr() + w.matrix.nonZeros(), 0.0);
+  for (int k = 0; k < n; ++k)
+    if (w.free_index[k] >= 0)  // M - h d(air drag)/dv
+      w.add_block(w.diagonal[w.free_index[k]], m.masses[k] * (1 + h * m.air_damping[k]) * Mat3::Identity());
+  for (std::size_t k = 0; k < m.springs.size(); ++k) {
+    const Spring& s = m.springs[k];
+    const SpringEvaluation e = evaluate_spring(x[s.i], x[s.j], v[s.i], v[s.j], s.rest_length, s.stiffness, s.damping);
+    forces[s.i] += e.force;
+    forces[s.j] -= e.force;
+    if (stiffness_times_v) {
+      const Vec3 kv = e.d_force_d_x * (v[s.i] - v[s.j]);
+      (*stiffness_times_v)[s.i] += kv;
+      (*stiffness_times_v)[s.j] -= kv;
+    }
+    const Mat3 diagonal_block = -h * e.d_force_d_v - h * h * e.d_force_d_x;  // A's (i,i) and (j,j)
+    const int a = w.free_index[s.i], b = w.free_index[s.j];
+    if (a >= 0) w.add_block(w.diagonal[a], diagonal_block);
+    if (b >= 0) w.add_block(w.diagonal[b], diagonal_block);
+    if (a >= 0 && b >= 0) {
+      w.add_block(w.spring_blocks[k].ij, -diagonal_block);
+      w.add_block(w.spring_blocks[k].ji, -diagonal_block);
+    } else if (coupling && a >= 0) {  // j prescribed: A's (i,j) block times its dv moves to the right-hand side
+      (*coupling)[s.i] -= diagonal_block * (*pinned_dv)[s.j];
+    } else if (coupling && b >= 0) {
+      (*coupling)[s.j] -= diagonal_block * (*pinned_dv)[s.i];
+    }
+  }
+}
+
+void Integrator::find_contacts(const State& state) {
+  const Model& m = model_;
+  Workspace& w = *work_;
+  const Scalar h = h_;
+  w.contacts.clear();
+  if (!m.scene.collisions.obstacles) return;
+  const Scalar thickness = m.scene.collisions.thickness;
+  const Scalar reach = CONTACT_REACH * thickness;
+  for (const Obstacle& obstacle : m.obstacles) {
+    if (obstacle.spec.kind == ObstacleSpec::Kind::Mesh) continue;
+    for (std::size_t v = 0; v < state.positions.size(); ++v) {
+      if (w.free_index[v] < 0) continue;
+      const SurfaceContact c = analytic_contact(obstacle, state.time, state.positions[v]);
+      if (!(c.signed_distance < reach)) continue;
+      SolveContact contact;
+      contact.vertex = {int(v), -1, -1};
+      contact.weight = {1, 0, 0};
+      contact.normal = c.normal;
+      contact.surface_velocity = c.surface_velocity;
+      contact.target = c.normal.dot(c.surface_velocity);
+      w.contacts.push_back(contact);
+    }
+  }
+  if (collisions_) {
+    const auto mesh = collisions_->mesh_contacts(state.positions, state.time, h, reach);
+    w.contacts.insert(w.contacts.end(), mesh.begin(), mesh.end());
+  }
+  // Each contact's place in the matrix: the blocks joining its vertices. A contact whose
+  // vertices the matrix does not join (no spring between them) keeps its heaviest vertex alone.
+  w.contact_blocks.clear();
+  for (SolveContact& c : w.contacts) {
+    std::array<std::array<std::array<int, 3>, 3>, 3> blocks{};
+    bool joined = true;
+    for (int i = 0; i < c.count && joined; ++i)
+      for (int j = 0; j < c.count && joined; ++j) {
+        const int a = w.free_index[std::size_t(c.vertex[i])], b = w.free_index[std::size_t(c.vertex[j])];
+        if (a == b) blocks[i][j] = w.diagonal[a];
+        else if (const auto offsets = w.find_block(a, b)) blocks[i][j] = *offsets;
+        else joined = false;
+      }
+    if (!joined) {
+      const int heaviest = int(std::max_element(c.weight.begin(), c.weight.begin() + c.count) - c.weight.begin());
+      c.vertex = {c.vertex[heaviest], -1, -1};
+      c.weight = {1, 0, 0};
+      c.count = 1;
+      blocks[0][0] = w.diagonal[w.free_index[std::size_t(c.vertex[0])]];
+    }
+    w.contact_blocks.push_back(blocks);
+  }
+}
+
 bool Integrator::solve_linearised(State& state, const std::vector<Vec3>& pinned_dv, StepReport& report) {
   const Model& m = model_;
   Workspace& w = *work_;
@@ -259,41 +389,120 @@ bool Integrator::solve_linearised(State& state, const std::vector<Vec3>& pinned_
   // The system matrix A = M - h dF/dv - h^2 dF/dx over the free vertices, and the right-hand
   // side h (F + h dF/dx v) less A's coupling to the prescribed dv; spring forces join the
   // workspace's.
-  std::fill(w.matrix.valuePtr(), w.matrix.valuePtr() + w.matrix.nonZeros(), 0.0);
-  for (int v = 0; v < n; ++v)
-    if (w.free_index[v] >= 0)  // M - h d(air drag)/dv
-      w.add_block(w.diagonal[w.free_index[v]], m.masses[v] * (1 + h * m.air_damping[v]) * Mat3::Identity());
   std::vector<Vec3> stiffness_times_v(n, Vec3::Zero());  // dF/dx v
   std::vector<Vec3> coupling(n, Vec3::Zero());           // A_(free, pinned) dv_pinned
-  for (std::size_t k = 0; k < m.springs.size(); ++k) {
-    const Spring& s = m.springs[k];
-    const SpringEvaluation e = evaluate_spring(state.positions[s.i], state.positions[s.j], state.velocities[s.i],
-                                               state.velocities[s.j], s.rest_length, s.stiffness, s.damping);
-    w.forces[s.i] += e.force;
-    w.forces[s.j] -= e.force;
-    const Vec3 kv = e.d_force_d_x * (state.velocities[s.i] - state.velocities[s.j]);
-    stiffness_times_v[s.i] += kv;
-    stiffness_times_v[s.j] -= kv;
-    const Mat3 diagonal_block = -h * e.d_force_d_v - h * h * e.d_force_d_x;  // A's (i,i) and (j,j)
-    const int a = w.free_index[s.i], b = w.free_index[s.j];
-    if (a >= 0) w.add_block(w.diagonal[a], diagonal_block);
-    if (b >= 0) w.add_block(w.diagonal[b], diagonal_block);
-    if (a >= 0 && b >= 0) {
-      w.add_block(w.spring_blocks[k].ij, -diagonal_block);
-      w.add_block(w.spring_blocks[k].ji, -diagonal_block);
-    } else if (a >= 0) {  // j prescribed: A's (i,j) block times its dv moves to the right-hand side
-      coupling[s.i] -= diagonal_block * pinned_dv[s.j];
-    } else if (b >= 0) {
-      coupling[s.j] -= diagonal_block * pinned_dv[s.i];
-    }
-  }
+  assemble(state.positions, state.velocities, w.forces, &stiffness_times_v, &pinned_dv, &coupling);
   for (int v = 0; v < n; ++v) {
     const int a = w.free_index[v];
     if (a >= 0) w.rhs.segment<3>(3 * a) = h * (w.forces[v] + h * stiffness_times_v[v]) - coupling[v];
   }
+  // Each free vertex's own scale in the system, for the penalties that hold it: its diagonal
+  // block's largest entry (the mass, or h^2 k where springs are stiffer), before any penalty.
+  w.scale.resize(std::size_t(w.free_count));
+  for (int a = 0; a < w.free_count; ++a) {
+    w.scale[std::size_t(a)] = 0;
+    for (int c = 0; c < 3; ++c) w.scale[std::size_t(a)] = std::max(w.scale[std::size_t(a)], w.matrix.valuePtr()[w.diagonal[a][c] + c]);
+  }
 
-  // The implicit solve.
-  if (!solve(report, "the linear solver failed: ")) return false;
+  // The contacts known at the step's start, held along their normals by a penalty: a contact's
+  // cloth points may not approach the obstacle faster than its target. A contact that pulls
+  // them towards the obstacle (its impulse negative) is released and the step solved again.
+  const auto normal_velocity = [&](const SolveContact& c, const VectorX* dv) {
+    Scalar speed = 0;
+    for (int i = 0; i < c.count; ++i) {
+      Vec3 v = state.velocities[c.vertex[i]];
+      if (dv) v += dv->segment<3>(3 * w.free_index[std::size_t(c.vertex[i])]);
+      speed += c.weight[i] * c.normal.dot(v);
+    }
+    return speed;
+  };
+  const auto hold_contacts = [&](Scalar sign, const std::vector<char>& which) {
+    for (std::size_t k = 0; k < w.contacts.size(); ++k) {
+      if (!which[k]) continue;
+      const SolveContact& c = w.contacts[k];
+      const Scalar hold = sign * w.contact_holds[k];
+      const Mat3 nn = c.normal * c.normal.transpose();
+      const Scalar missing = c.target - normal_velocity(c, nullptr);
+      for (int i = 0; i < c.count; ++i) {
+        for (int j = 0; j < c.count; ++j) w.add_block(w.contact_blocks[k][i][j], hold * c.weight[i] * c.weight[j] * nn);
+        w.rhs.segment<3>(3 * w.free_index[std::size_t(c.vertex[i])]) += hold * c.weight[i] * missing * c.normal;
+      }
+    }
+  };
+  // Coulomb friction of the contacts, in the solve, from the normal force each vertex's
+  // contacts made the step before (lagged, as in Baraff and Witkin 1998, section 5.3): a vertex
+  // slipping across its contact's normal at the step's start feels friction times that force
+  // against its slip. Where that could stop the slip within the step, as an implicit drag that
+  // reaches the force at the slip speed (or at FRICTION_SLIP, for a vertex slower than that),
+  // so it never reverses the slip and holds what sticks; otherwise as the force itself,
+  // linearised at the slip (constant along it, turning it across). In the solve, the neighbours of
+  // a vertex it holds are held with it (applied after the solve, it stopped a tablecloth's rim
+  // vertices while the springs to the hanging side had been solved for them sliding: the
+  // springs stretched).
+  const Scalar mu = m.scene.friction;
+  if (mu > 0) {
+    std::vector<int> strongest(std::size_t(n), -1);  // vertex -> its contact of largest weight
+    std::vector<Scalar> weight(std::size_t(n), 0);
+    for (std::size_t k = 0; k < w.contacts.size(); ++k)
+      for (int i = 0; i < w.contacts[k].count; ++i) {
+        const std::size_t v = std::size_t(w.contacts[k].vertex[i]);
+        if (w.contacts[k].weight[i] > weight[v]) weight[v] = w.contacts[k].weight[i], strongest[v] = int(k);
+      }
+    for (int v = 0; v < n; ++v) {
+      const int k = strongest[std::size_t(v)];
+      if (k < 0 || !(w.normal_force[std::size_t(v)] > 0)) continue;
+      const SolveContact& c = w.contacts[std::size_t(k)];
+      const Mat3 across = Mat3::Identity() - c.normal * c.normal.transpose();
+      const Vec3 slip = across * (state.velocities[v] - c.surface_velocity);
+      const Scalar force = mu * w.normal_force[std::size_t(v)], speed = slip.norm();
+      const int a = w.free_index[v];
+      if (h * force >= m.masses[v] * speed) {  // it can stop the slip within the step: a drag
+        const Scalar drag = force / std::max(speed, FRICTION_SLIP);
+        w.add_block(w.diagonal[a], h * drag * across);
+        w.rhs.segment<3>(3 * a) -= h * drag * slip;
+      } else {
+        const Vec3 direction = slip / speed;
+        w.add_block(w.diagonal[a], h * force / speed * (across - direction * direction.transpose()));
+        w.rhs.segment<3>(3 * a) -= h * force * direction;
+      }
+    }
+  }
+
+  w.contact_holds.assign(w.contacts.size(), 0);
+  for (std::size_t k = 0; k < w.contacts.size(); ++k) {
+    Scalar scale = 0;
+    for (int i = 0; i < w.contacts[k].count; ++i)
+      scale = std::max(scale, w.scale[std::size_t(w.free_index[std::size_t(w.contacts[k].vertex[i])])]);
+    w.contact_holds[k] = RESPONSE_HOLD * scale;
+  }
+  std::vector<char> held(w.contacts.size(), 1);
+  hold_contacts(1, held);
+  w.contact_impulses.assign(w.contacts.size(), 0);
+  for (int attempt = 0;; ++attempt) {
+    if (!solve(report, "the linear solver failed: ")) return false;
+    std::vector<char> pulling(w.contacts.size(), 0);
+    bool any = false;
+    for (std::size_t k = 0; k < w.contacts.size(); ++k) {
+      if (!held[k]) continue;
+      w.contact_impulses[k] = w.contact_holds[k] * (w.contacts[k].target - normal_velocity(w.contacts[k], &w.solution));
+      if (!(w.contact_impulses[k] < 0)) continue;
+      // A pull too weak to move its vertices by a negligible distance within the step stays
+      // held (not worth solving again); a stronger one is released.
+      const SolveContact& c = w.contacts[k];
+      Scalar mass = 0;
+      for (int i = 0; i < c.count; ++i) mass = std::max(mass, m.masses[std::size_t(c.vertex[i])]);
+      if (-w.contact_impulses[k] * h > mass * NEGLIGIBLE_MOTION * m.scene.collisions.thickness)
+        pulling[k] = 1, held[k] = 0, any = true;
+      w.contact_impulses[k] = 0;
+    }
+    if (!any || attempt == 1) break;
+    hold_contacts(-1, pulling);
+  }
+  // The normal forces, for the next step's friction.
+  w.normal_force.assign(std::size_t(n), 0);
+  for (std::size_t k = 0; k < w.contacts.size(); ++k)
+    for (int i = 0; i < w.contacts[k].count; ++i)
+      w.normal_force[std::size_t(w.contacts[k].vertex[i])] += w.contacts[k].weight[i] * w.contact_impulses[k] / h;
 
   // Velocities; the motion of the step starts as the same velocities.
   for (int v = 0; v < n; ++v) {
@@ -308,12 +517,6 @@ bool Integrator::solve_projective(State& state, const std::vector<Vec3>& pinned_
   Workspace& w = *work_;
   const Scalar h = h_;
   const std::size_t n = m.vertex_count();
-  // The explicit forces: gravity and the wind's drag; the air's damping is in the system.
-  const Vec3 air_velocity = m.scene.wind ? m.scene.wind->velocity : Vec3::Zero();
-  w.explicit_forces = w.forces;
-  for (std::size_t v = 0; v < n; ++v)
-    w.explicit_forces[v] += m.air_damping[v] * m.masses[v] * (state.velocities[v] - air_velocity);
-  w.start_velocities = state.velocities;
   // The springs' forces at the step's start on the pinned vertices, for the ledger (source_work).
   if (!m.pins.empty())
     for (const Spring& s : m.springs) {
@@ -444,37 +647,37 @@ bool Integrator::solve(StepReport& report, const std::string& failure, const Vec
   return solved.ok;
 }
 
-bool Integrator::spread_response(const std::vector<Vec3>& solved, std::vector<Vec3>& motion,
-                                 std::vector<Vec3>& velocities, StepReport& report) {
+void Integrator::spread_response(const std::vector<Vec3>& start, const std::vector<Vec3>& solved,
+                                 const std::vector<char>& held, std::vector<Vec3>& motion, std::vector<Vec3>& velocities,
+                                 StepReport& report) {
   const Model& m = model_;
   Workspace& w = *work_;
   const int n = int(m.vertex_count());
-  bool changed = false;
+  // The step's system as the solve assembled it at the start, without its contacts and
+  // friction (the held vertices are what the response made of them), and the held vertices'
+  // changes as penalties: linear in those changes, motion and velocities apart.
+  std::vector<Vec3> unused(static_cast<std::size_t>(n), Vec3::Zero());
+  assemble(start, w.start_velocities, unused);
   VectorX velocity_rhs = VectorX::Zero(w.rhs.size());
   w.rhs.setZero();
   for (int v = 0; v < n; ++v) {
     const int a = w.free_index[v];
-    if (a < 0 || (motion[v] == solved[v] && velocities[v] == solved[v])) continue;
-    changed = true;
-    Scalar diagonal = 0;  // the block's own scale: the mass, or h^2 k where springs are stiffer
-    for (int c = 0; c < 3; ++c) diagonal = std::max(diagonal, w.matrix.valuePtr()[w.diagonal[a][c] + c]);
-    const Scalar hold = RESPONSE_HOLD * diagonal;
+    if (a < 0 || !held[std::size_t(v)]) continue;
+    const Scalar hold = RESPONSE_HOLD * w.scale[std::size_t(a)];
     w.add_block(w.diagonal[a], hold * Mat3::Identity());
     w.rhs.segment<3>(3 * a) = hold * (motion[v] - solved[v]);
     velocity_rhs.segment<3>(3 * a) = hold * (velocities[v] - solved[v]);
   }
-  if (!changed) return false;
-  if (!solve(report, "the linear solver failed spreading the collision response: ")) return true;
+  if (!solve(report, "the linear solver failed spreading the collision response: ")) return;
   for (int v = 0; v < n; ++v) {
     const int a = w.free_index[v];
-    if (a >= 0) motion[v] = solved[v] + Vec3(w.solution.segment<3>(3 * a));
+    if (a >= 0 && !held[std::size_t(v)]) motion[v] = solved[v] + Vec3(w.solution.segment<3>(3 * a));
   }
-  if (!solve(report, "the linear solver failed spreading the collision response: ", &velocity_rhs)) return true;
+  if (!solve(report, "the linear solver failed spreading the collision response: ", &velocity_rhs)) return;
   for (int v = 0; v < n; ++v) {
     const int a = w.free_index[v];
-    if (a >= 0) velocities[v] = solved[v] + Vec3(w.solution.segment<3>(3 * a));
+    if (a >= 0 && !held[std::size_t(v)]) velocities[v] = solved[v] + Vec3(w.solution.segment<3>(3 * a));
   }
-  return true;
 }
 
 bool Integrator::iterate_projective(const std::vector<Vec3>& start, std::vector<Vec3>& positions, StepReport& report,

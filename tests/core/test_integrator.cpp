@@ -116,3 +116,39 @@ TEST(Integrator, MovingSphereCarriesTheClothWithFriction) {
   const int centre = 3 * 7 + 3;
   EXPECT_NEAR(state.positions[centre].z(), 0.8 + 0.01, 0.02);
 }
+
+namespace {
+
+// A square cloth lying on a plane tilted 20 degrees about y, with the given friction: its
+// mean displacement along the slope after `seconds`.
+Scalar slide_on_incline(Scalar friction, Scalar seconds) {
+  const Scalar tilt = 20 * M_PI / 180;
+  std::ostringstream json;
+  json.precision(17);
+  json << R"({"frame_time": 0.03333333333333333, "cloths": [{"grid": {"size": [0.3, 0.3], "resolution": [10, 10]},
+    "transform": {"translate": [0, 0, 0.0051], "rotate": [20, 0, 1, 0]}}],
+    "obstacles": [{"plane": {"point": [0, 0, 0], "normal": [)" << std::sin(tilt) << ", 0, " << std::cos(tilt) << R"(]}}],
+    "friction": )" << friction << "}";
+  const Model model = model_of(json.str());
+  State state = initial_state(model);
+  Integrator integrator(model);
+  const int steps = int(std::lround(seconds / model.scene.timestep()));
+  for (int step = 0; step < steps; ++step) EXPECT_TRUE(integrator.step(state).ok);
+  const Vec3 down_slope(std::cos(tilt), 0, -std::sin(tilt));  // along the plane, downhill
+  Scalar along = 0;
+  for (std::size_t v = 0; v < state.positions.size(); ++v) along += (state.positions[v] - model.initial_positions[v]).dot(down_slope);
+  return along / Scalar(state.positions.size());
+}
+
+}  // namespace
+
+// Coulomb friction on a resting contact, the block-on-an-incline test: below the friction angle
+// (tan 20 degrees = 0.364 < 0.5) the cloth stays; above it (friction 0.2) it slides with the
+// acceleration g (sin 20 - 0.2 cos 20) = 1.511 m/s^2, 0.756 m in the first second (the air's
+// default damping slows it a little).
+TEST(Integrator, FrictionHoldsAClothOnAnInclineAndLetsItSlideWhenTooSteep) {
+  EXPECT_LT(std::abs(slide_on_incline(0.5, 1.0)), 5e-4);
+  const Scalar slid = slide_on_incline(0.2, 1.0);
+  EXPECT_GT(slid, 0.95 * 0.5 * 1.511);
+  EXPECT_LT(slid, 1.0 * 0.5 * 1.511);
+}

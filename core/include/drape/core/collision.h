@@ -12,6 +12,7 @@
 ///   iterated -> rigid impact zones -> the fail-safe (colliding vertices keep their start
 ///   positions, then all cloth vertices do).
 
+#include <array>
 #include <functional>
 #include <memory>
 #include <string>
@@ -56,6 +57,20 @@ struct CollisionCounters {
 /// in the statistics as rest_clamped_pairs). Empty when nothing to say.
 std::string thickness_note(const Model& model, const CollisionSettings& settings = {});
 
+/// A contact the implicit solve keeps (Baraff and Witkin 1998, section 5.3: a constraint on
+/// the velocity along the contact's normal; here held by a penalty): the relative velocity of
+/// its cloth points, sum_k weight_k v_k over its cloth vertices (a vertex; an edge's two, by
+/// the closest point's weights; a triangle's three), along normal (unit, from the obstacle to
+/// the cloth) must reach at least target (m/s) at the step's end.
+struct SolveContact {
+  std::array<int, 3> vertex{-1, -1, -1};
+  std::array<Scalar, 3> weight{};
+  int count = 1;  ///< cloth vertices in use
+  Vec3 normal = Vec3::UnitZ();
+  Scalar target = 0;
+  Vec3 surface_velocity = Vec3::Zero();  ///< the obstacle's at the contact, for friction
+};
+
 class CollisionPipeline {
  public:
   CollisionPipeline(const Model& model, const CollisionSettings& settings);
@@ -64,6 +79,13 @@ class CollisionPipeline {
   /// place so that start + h motion is free of collisions. Kinematic vertices (pinned cloth
   /// vertices, obstacles) are never changed.
   CollisionCounters resolve(const std::vector<Vec3>& start, Scalar t, Scalar h, std::vector<Vec3>& motion);
+
+  /// The contacts of the free cloth with the mesh obstacles at the step's start, within reach:
+  /// a cloth vertex and an obstacle's triangle, a cloth edge and an obstacle's edge (each
+  /// closest at an inner point of both), an obstacle's vertex and a cloth triangle (closest
+  /// inside it); for each cloth feature the nearest in each distinct direction (a rim gives
+  /// the top's and the side's). Each may not approach the obstacle within the step.
+  std::vector<SolveContact> mesh_contacts(const std::vector<Vec3>& start, Scalar t, Scalar h, Scalar reach);
 
   /// Whether the scene needs the pipeline at all (self-collision on, or mesh obstacles with
   /// obstacle collisions on): a scene pays only for what it asks for.

@@ -85,12 +85,23 @@ class Integrator {
   // time and iterations added to report, and on failure report says so (failure, then why).
   // With again, solves for that right-hand side with the last solve's matrix instead.
   bool solve(StepReport& report, const std::string& failure, const VectorX* again = nullptr);
-  // The collision response (motion and velocities less solved, on the contact vertices)
-  // spread through this step's system: solved again with those vertices held to their new
-  // motion, then (the same factorisation) to their new velocities; motion and velocities
-  // receive the results. False when the response changed nothing.
-  bool spread_response(const std::vector<Vec3>& solved, std::vector<Vec3>& motion, std::vector<Vec3>& velocities,
-                       StepReport& report);
+  // The collision response spread through the step: backward Euler's equations of the free
+  // vertices not held solved by Newton steps linearised at the response's end state (positions
+  // from start and motion, damping from velocities), the held vertices (those the response
+  // changed) kept (a penalty) where it put them; motion and velocities of the others receive
+  // the results, and report says why when the solve fails.
+  void spread_response(const std::vector<Vec3>& start, const std::vector<Vec3>& solved, const std::vector<char>& held,
+                       std::vector<Vec3>& motion, std::vector<Vec3>& velocities, StepReport& report);
+  // The linearised system's matrix M (1 + h a) - h dF/dv - h^2 dF/dx over the free vertices,
+  // assembled at positions x and velocities v into the workspace; the springs' forces added to
+  // forces, and when asked dF/dx v into stiffness_times_v and the matrix's coupling to the
+  // prescribed dv of the pinned vertices into coupling.
+  void assemble(const std::vector<Vec3>& x, const std::vector<Vec3>& v, std::vector<Vec3>& forces,
+                std::vector<Vec3>* stiffness_times_v = nullptr, const std::vector<Vec3>* pinned_dv = nullptr,
+                std::vector<Vec3>* coupling = nullptr);
+  // The contacts of the free cloth vertices with the obstacles at the state (the workspace's
+  // contacts), for the linearised solve to hold.
+  void find_contacts(const State& state);
   // The linearised system assembled at the state (forces into the workspace) and solved:
   // the state's velocities advanced; false (report says why) when the solve failed.
   bool solve_linearised(State& state, const std::vector<Vec3>& pinned_dv, StepReport& report);
