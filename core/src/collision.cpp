@@ -63,7 +63,7 @@ constexpr Scalar SAME_DIRECTION = 0.95;
 // contact with an obstacle's triangle, found as such.
 constexpr Scalar INNER_WEIGHT = 0.01;
 // The simultaneous impulses of a round (Impl::impulses): at most this many Gauss-Seidel sweeps,
-// fewer once no impulse changes by more than IMPULSE_TOLERANCE times the separation speed.
+// fewer once no impulse changes by more than IMPULSE_TOLERANCE times thickness / h.
 constexpr int IMPULSE_SWEEPS = 100;
 constexpr Scalar IMPULSE_TOLERANCE = 1e-3;
 
@@ -189,18 +189,22 @@ struct CollisionPipeline::Impl {
     std::map<std::array<int, 4>, std::size_t> index;
     // Adds a contact, or renews one found before (its impulse so far kept, the larger target).
     void add(const Contact& c, Scalar target_c, const std::vector<Scalar>& inverse_mass) {
+      Scalar d = 0;
+      for (int k = 0; k < 4; ++k) d += c.weight[k] * c.weight[k] * inverse_mass[c.vertex[k]];
       const auto [place, added] = index.emplace(c.vertex, contacts.size());
       if (!added) {
-        contacts[place->second] = c;
-        target[place->second] = std::max(target[place->second], target_c);
+        const std::size_t i = place->second;
+        // An impulse along a normal that has turned can no longer be taken back along the new one.
+        if (contacts[i].normal.dot(c.normal) < SAME_DIRECTION) pushed[i] = 0, rubbed[i] = 0;
+        contacts[i] = c;
+        target[i] = std::max(target[i], target_c);
+        denominator[i] = d;
         return;
       }
       contacts.push_back(c);
       target.push_back(target_c);
       pushed.push_back(0);
       rubbed.push_back(0);
-      Scalar d = 0;
-      for (int k = 0; k < 4; ++k) d += c.weight[k] * c.weight[k] * inverse_mass[c.vertex[k]];
       denominator.push_back(d);
     }
   };

@@ -61,6 +61,7 @@ struct Integrator::Workspace {
   std::vector<std::array<std::array<std::array<int, 3>, 3>, 3>> contact_blocks;  // [contact][i][j]: block (vertex i, vertex j)
   std::vector<Scalar> contact_holds, contact_impulses;
   std::vector<Scalar> scale;  // per free vertex: its diagonal block's largest entry before penalties
+  Scalar contact_work = 0;           // J: what the held contacts did at moving obstacles in the last solve
   std::vector<Scalar> normal_force;  // per vertex, N: what its contacts pushed with in the last solve
 
   std::array<int, 3> block(int a, int b) const {
@@ -237,10 +238,11 @@ StepReport Integrator::advance(State& state) {
     air_forces = w.forces;
     for (int v = 0; v < n; ++v) air_forces[v] -= m.masses[v] * m.scene.gravity;
   }
-  if (!projective_) find_contacts(state);
+  if (m.scene.solver.kind == SolverKind::Cholmod) find_contacts(state);
+  else work_->contacts.clear();
   if (!(projective_ ? solve_projective(state, pinned_dv, report) : solve_linearised(state, pinned_dv, report)))
     return report;
-  report.external_work = source_work(pinned_dv, air_forces, state.velocities);
+  report.external_work = source_work(pinned_dv, air_forces, state.velocities) + (projective_ ? 0 : w.contact_work);
   const bool obstacles_move = std::any_of(m.obstacles.begin(), m.obstacles.end(),
                                           [](const Obstacle& o) { return o.spec.motion.moves(); });
   const Scalar kinetic_before_response = obstacles_move ? kinetic_energy(m, state) : 0;
@@ -406,7 +408,8 @@ bool Integrator::solve_linearised(State& state, const std::vector<Vec3>& pinned_
 
   // The contacts known at the step's start, held along their normals by a penalty: a contact's
   // cloth points may not approach the obstacle faster than its target. A contact that pulls
-  // them towards the obstacle (its impulse negative) is released and the step solved again.
+  // them towards the obstacle (its impulse negative) is released and the step solved again,
+  // once: one that pulls after that stays held for this step (counted as no force).
   const auto normal_velocity = [&](const SolveContact& c, const VectorX* dv) {
     Scalar speed = 0;
     for (int i = 0; i < c.count; ++i) {
@@ -440,6 +443,13 @@ bool Integrator::solve_linearised(State& state, const std::vector<Vec3>& pinned_
   // vertices while the springs to the hanging side had been solved for them sliding: the
   // springs stretched).
   const Scalar mu = m.scene.friction;
+  struct Friction {
+    int vertex;
+    Mat3 block;    // its term of the matrix
+    Vec3 pushed;   // and of the right-hand side: its impulse is pushed - block dv
+    Vec3 surface;  // the obstacle's velocity
+  };
+  std::vector<Friction> frictions;  // on moving obstacles, for the work they do
   if (mu > 0) {
     std::vector<int> strongest(std::size_t(n), -1);  // vertex -> its contact of largest weight
     std::vector<Scalar> weight(std::size_t(n), 0);
@@ -456,15 +466,20 @@ bool Integrator::solve_linearised(State& state, const std::vector<Vec3>& pinned_
       const Vec3 slip = across * (state.velocities[v] - c.surface_velocity);
       const Scalar force = mu * w.normal_force[std::size_t(v)], speed = slip.norm();
       const int a = w.free_index[v];
+      Mat3 block;
+      Vec3 pushed;
       if (h * force >= m.masses[v] * speed) {  // it can stop the slip within the step: a drag
         const Scalar drag = force / std::max(speed, FRICTION_SLIP);
-        w.add_block(w.diagonal[a], h * drag * across);
-        w.rhs.segment<3>(3 * a) -= h * drag * slip;
+        block = h * drag * across;
+        pushed = -h * drag * slip;
       } else {
         const Vec3 direction = slip / speed;
-        w.add_block(w.diagonal[a], h * force / speed * (across - direction * direction.transpose()));
-        w.rhs.segment<3>(3 * a) -= h * force * direction;
+        block = h * force / speed * (across - direction * direction.transpose());
+        pushed = -h * force * direction;
       }
+      w.add_block(w.diagonal[a], block);
+      w.rhs.segment<3>(3 * a) += pushed;
+      if (c.surface_velocity != Vec3::Zero()) frictions.push_back({v, block, pushed, c.surface_velocity});
     }
   }
 
@@ -498,6 +513,14 @@ bool Integrator::solve_linearised(State& state, const std::vector<Vec3>& pinned_
     if (!any || attempt == 1) break;
     hold_contacts(-1, pulling);
   }
+  // The work the held contacts did on the cloth at moving obstacles' velocities (their normal
+  // impulses and their friction), for the step's energy ledger: zero on still obstacles.
+  w.contact_work = 0;
+  for (std::size_t k = 0; k < w.contacts.size(); ++k)
+    w.contact_work += w.contact_impulses[k] * w.contacts[k].normal.dot(w.contacts[k].surface_velocity);
+  for (const Friction& f : frictions)
+    w.contact_work += (f.pushed - f.block * w.solution.segment<3>(3 * w.free_index[std::size_t(f.vertex)])).dot(f.surface);
+  w.contact_work = std::max<Scalar>(0, w.contact_work);
   // The normal forces, for the next step's friction.
   w.normal_force.assign(std::size_t(n), 0);
   for (std::size_t k = 0; k < w.contacts.size(); ++k)
@@ -548,15 +571,21 @@ StepReport Integrator::step(State& state) {
   }
   const State before = state;
   const Scalar energy_before = kinetic_energy(m, state) + potential_energy(m, state);
+  // The friction of every attempt starts from the normal forces the step before left; the
+  // kept attempt's are the next step's.
+  const std::vector<Scalar> normal_force_before = work_->normal_force;
+  std::vector<Scalar> kept_normal_force;
   // The step's energy beyond its start and its sources' work, once taken as `parts` equal parts.
   const auto take = [&](State& s, int parts) {
     h_ = h / parts;
+    work_->normal_force = normal_force_before;
     StepReport report = advance(s);
     for (int k = 1; k < parts && report.ok; ++k) report.add(advance(s));
     const Scalar excess = kinetic_energy(m, s) + potential_energy(m, s) - energy_before - report.external_work;
     return std::make_pair(report, excess);
   };
   auto [report, excess] = take(state, 1);
+  kept_normal_force = work_->normal_force;
   // The step made energy no source put in (an impact whose response the step's size could not
   // spread: a stopped vertex strains its neighbours' springs in one step): taken again in 2,
   // 4, ... parts while that excess keeps falling by half at least (strain from one step's
@@ -574,6 +603,7 @@ StepReport Integrator::step(State& state) {
     if (finer_excess < excess) {
       spent.add(report);
       report = finer, excess = finer_excess, state = std::move(again);
+      kept_normal_force = work_->normal_force;
       report.step_halvings = 0;
       ++spent.step_halvings;
     } else {
@@ -581,6 +611,7 @@ StepReport Integrator::step(State& state) {
     }
     if (!converging) break;
   }
+  work_->normal_force = std::move(kept_normal_force);
   // Counted once: the halvings of the kept attempt (log2 of its parts) and the work of all.
   const int halvings = spent.step_halvings;
   report.solve_ms += spent.solve_ms;

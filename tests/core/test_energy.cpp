@@ -109,6 +109,22 @@ TEST(Energy, AMovingHandlesWorkIsCountedInTheBound) {
   EXPECT_GT(ran.frames.back().external_work, ran.frames.back().potential_energy - ran.frames.front().potential_energy);
 }
 
+// A sphere that rises under a cloth lifts it: the contacts held in the solve push the cloth at
+// the sphere's velocity, and their work (normal impulses and friction at the surface's velocity)
+// is counted, so the energy it gives is within the bound.
+TEST(Energy, ARisingSpheresWorkThroughHeldContactsIsCountedInTheBound) {
+  const Model model = build_model(parse_scene(R"({
+    "frame_time": 0.04, "frame_steps": 4, "frames": 15,
+    "cloths": [{"grid": {"size": [0.5, 0.5], "resolution": [6, 6]}, "transform": {"translate": [0, 0, 0.31]}}],
+    "obstacles": [{"sphere": {"center": [0, 0, 0], "radius": 0.3}, "motion": {"velocity": [0, 0, 1]}}],
+    "collisions": {"thickness": 0.01}, "friction": 1.0})", "rising.json"));
+  const Ran ran = run(model, "rising");
+  expect_within_bound(ran, "rising");
+  // Lifted by about 0.6 m, and the counted work paid for it.
+  EXPECT_GT(ran.frames.back().potential_energy, ran.frames.front().potential_energy + 0.1);
+  EXPECT_GT(ran.frames.back().external_work, ran.frames.back().potential_energy - ran.frames.front().potential_energy);
+}
+
 // A cloth placed 5 cm under the ground is pushed out of it: energy no source gave (about 4 %
 // of the scale), so low limits warn and stop, keeping the frame that passed them.
 TEST(Limits, EnergyBeyondTheLimitsWarnsThenStops) {

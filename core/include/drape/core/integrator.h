@@ -7,8 +7,11 @@
 ///   with a sparse Cholesky factorisation (or conjugate gradient) of its 3n x 3n matrix every step;
 /// - the projective solver (projective.h): backward Euler's minimisation by local-global
 ///   iterations, one factorisation of an n x n matrix for the run.
-/// Pinned and scripted vertices are eliminated from either system (their motion is prescribed);
-/// then the contact response: analytic obstacles and the collision pipeline.
+/// Pinned and scripted vertices are eliminated from either system (their motion is prescribed).
+/// The linearised solve also holds the contacts with obstacles the step starts with, along
+/// their normals, with their friction (docs/collisions.md, "Contacts held in the solve"); then
+/// the contact response: analytic obstacles and the collision pipeline, spread through the
+/// system.
 
 #include <memory>
 #include <string>
@@ -85,11 +88,11 @@ class Integrator {
   // time and iterations added to report, and on failure report says so (failure, then why).
   // With again, solves for that right-hand side with the last solve's matrix instead.
   bool solve(StepReport& report, const std::string& failure, const VectorX* again = nullptr);
-  // The collision response spread through the step: backward Euler's equations of the free
-  // vertices not held solved by Newton steps linearised at the response's end state (positions
-  // from start and motion, damping from velocities), the held vertices (those the response
-  // changed) kept (a penalty) where it put them; motion and velocities of the others receive
-  // the results, and report says why when the solve fails.
+  // The collision response spread through the step: the system assembled again at the step's
+  // start (without the contacts' penalties), solved with each held vertex (those the response
+  // moved by more than a negligible distance) kept by a penalty at its new motion, then (the
+  // same factorisation) at its new velocity, from the solve's velocities (solved); motion and
+  // velocities of the others receive the results, and report says why when the solve fails.
   void spread_response(const std::vector<Vec3>& start, const std::vector<Vec3>& solved, const std::vector<char>& held,
                        std::vector<Vec3>& motion, std::vector<Vec3>& velocities, StepReport& report);
   // The linearised system's matrix M (1 + h a) - h dF/dv - h^2 dF/dx over the free vertices,
