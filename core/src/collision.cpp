@@ -136,8 +136,9 @@ struct CollisionPipeline::Impl {
     options.thickness = 0;  // exact contact; the thickness is kept by proximity repulsion
   }
 
-  // Candidate elementary tests for the motion start -> end, boxes grown by margin.
-  ccd::Candidates candidates(Scalar margin, CollisionCounters& counters) {
+  // Candidate elementary tests for the motion start -> end, boxes grown by margin; the cloth
+  // against itself too when self-collision is on and self is asked for.
+  ccd::Candidates candidates(Scalar margin, CollisionCounters& counters, bool self = true) {
     ccd::Candidates all;
     boxes.resize(cloth_triangles.size());
     for (std::size_t i = 0; i < cloth_triangles.size(); ++i) boxes[i] = ccd::swept_box(cloth_triangles[i], start, end, margin);
@@ -148,7 +149,7 @@ struct CollisionPipeline::Impl {
       all.vertex_face.insert(all.vertex_face.end(), c.vertex_face.begin(), c.vertex_face.end());
       all.edge_edge.insert(all.edge_edge.end(), c.edge_edge.begin(), c.edge_edge.end());
     };
-    if (model.scene.collisions.self) {
+    if (self && model.scene.collisions.self) {
       const auto pairs = cloth_tree.self_pairs();
       counters.bvh_pairs += long(pairs.size());
       append(ccd::feature_pairs(cloth_triangles, cloth_triangles, pairs, features));
@@ -162,6 +163,15 @@ struct CollisionPipeline::Impl {
       append(ccd::feature_pairs(cloth_triangles, mo.triangles, pairs, features));
     }
     return all;
+  }
+
+  // The mesh obstacles' vertices at t (start) and t + h (end).
+  void pose_obstacles(Scalar t, Scalar h) {
+    for (const MeshObstacle& mo : obstacles) {
+      const auto now = posed_vertices(*mo.obstacle, t), next = posed_vertices(*mo.obstacle, t + h);
+      std::copy(now.begin(), now.end(), start.begin() + mo.first_vertex);
+      std::copy(next.begin(), next.end(), end.begin() + mo.first_vertex);
+    }
   }
 
   void set_end(Scalar h, const std::vector<Vec3>& motion) {
@@ -449,9 +459,9 @@ std::vector<SolveContact> CollisionPipeline::mesh_contacts(const std::vector<Vec
   std::vector<SolveContact> out;
   if (m.obstacles.empty()) return out;
   for (int v = 0; v < m.cloth_vertices; ++v) m.start[v] = m.end[v] = start[v];
-  m.boxes.resize(m.cloth_triangles.size());
-  for (std::size_t i = 0; i < m.cloth_triangles.size(); ++i) m.boxes[i] = ccd::swept_box(m.cloth_triangles[i], m.start, m.end, reach);
-  m.cloth_tree.update(m.boxes);
+  m.pose_obstacles(t, h);
+  CollisionCounters unused;
+  const ccd::Candidates c = m.candidates(reach, unused, false);
   // Per cloth feature (its vertices), its nearest obstacle points in distinct directions.
   std::map<std::array<int, 3>, std::vector<std::pair<Scalar, SolveContact>>> near;
   const auto free = [&](int v) { return v < m.cloth_vertices && m.inverse_mass[std::size_t(v)] > 0; };
@@ -474,43 +484,34 @@ std::vector<SolveContact> CollisionPipeline::mesh_contacts(const std::vector<Vec
     list.emplace_back(distance, contact);
   };
   const auto inner = [](Scalar w) { return w > INNER_WEIGHT && w < 1 - INNER_WEIGHT; };
-  for (Impl::MeshObstacle& mo : m.obstacles) {
-    const auto now = posed_vertices(*mo.obstacle, t), next = posed_vertices(*mo.obstacle, t + h);
-    std::copy(now.begin(), now.end(), m.start.begin() + mo.first_vertex);
-    std::copy(next.begin(), next.end(), m.end.begin() + mo.first_vertex);
-    std::vector<ccd::Aabb> obstacle_boxes(mo.triangles.size());
-    for (std::size_t i = 0; i < mo.triangles.size(); ++i) obstacle_boxes[i] = ccd::swept_box(mo.triangles[i], m.start, m.end, 0);
-    mo.tree.update(obstacle_boxes);
-    const ccd::Candidates c = ccd::feature_pairs(m.cloth_triangles, mo.triangles, m.cloth_tree.pairs_with(mo.tree));
-    const auto& x = m.start;
-    for (const auto& p : c.vertex_face) {
-      const auto& f = p.face;
-      const auto closest = ccd::closest_point_triangle<Scalar>(x[p.vertex], x[f[0]], x[f[1]], x[f[2]]);
-      const Scalar wb = closest.weight_b, wc = closest.weight_c, wa = 1 - wb - wc;
-      SolveContact contact;
-      if (free(p.vertex)) {  // a cloth vertex and an obstacle's triangle
-        contact.vertex = {p.vertex, -1, -1};
-        contact.weight = {1, 0, 0};
-        add(contact, x[p.vertex] - closest.point, wa * velocity(f[0]) + wb * velocity(f[1]) + wc * velocity(f[2]));
-      } else if (p.vertex >= m.cloth_vertices && free(f[0]) && free(f[1]) && free(f[2]) && inner(wa) && inner(wb) &&
-                 inner(wc)) {  // an obstacle's vertex and a cloth triangle
-        contact.vertex = {f[0], f[1], f[2]};
-        contact.weight = {wa, wb, wc};
-        contact.count = 3;
-        add(contact, closest.point - x[p.vertex], velocity(p.vertex));
-      }
+  const auto& x = m.start;
+  for (const auto& p : c.vertex_face) {
+    const auto& f = p.face;
+    const auto closest = ccd::closest_point_triangle<Scalar>(x[p.vertex], x[f[0]], x[f[1]], x[f[2]]);
+    const Scalar wb = closest.weight_b, wc = closest.weight_c, wa = 1 - wb - wc;
+    SolveContact contact;
+    if (free(p.vertex)) {  // a cloth vertex and an obstacle's triangle
+      contact.vertex = {p.vertex, -1, -1};
+      contact.weight = {1, 0, 0};
+      add(contact, x[p.vertex] - closest.point, wa * velocity(f[0]) + wb * velocity(f[1]) + wc * velocity(f[2]));
+    } else if (p.vertex >= m.cloth_vertices && free(f[0]) && free(f[1]) && free(f[2]) && inner(wa) && inner(wb) &&
+               inner(wc)) {  // an obstacle's vertex and a cloth triangle
+      contact.vertex = {f[0], f[1], f[2]};
+      contact.weight = {wa, wb, wc};
+      contact.count = 3;
+      add(contact, closest.point - x[p.vertex], velocity(p.vertex));
     }
-    for (const auto& p : c.edge_edge) {  // edge_a is the cloth's (its indices are the smaller)
-      if (!free(p.edge_a[0]) || !free(p.edge_a[1]) || p.edge_b[0] < m.cloth_vertices) continue;
-      const auto closest = ccd::closest_segment_segment<Scalar>(x[p.edge_a[0]], x[p.edge_a[1]], x[p.edge_b[0]], x[p.edge_b[1]]);
-      if (!inner(closest.s) || !inner(closest.u)) continue;  // a vertex's contact, found as such
-      SolveContact contact;
-      contact.vertex = {p.edge_a[0], p.edge_a[1], -1};
-      contact.weight = {1 - closest.s, closest.s, 0};
-      contact.count = 2;
-      add(contact, closest.point_a - closest.point_b,
-          (1 - closest.u) * velocity(p.edge_b[0]) + closest.u * velocity(p.edge_b[1]));
-    }
+  }
+  for (const auto& p : c.edge_edge) {  // edge_a is the cloth's (its indices are the smaller)
+    if (!free(p.edge_a[0]) || !free(p.edge_a[1])) continue;
+    const auto closest = ccd::closest_segment_segment<Scalar>(x[p.edge_a[0]], x[p.edge_a[1]], x[p.edge_b[0]], x[p.edge_b[1]]);
+    if (!inner(closest.s) || !inner(closest.u)) continue;  // a vertex's contact, found as such
+    SolveContact contact;
+    contact.vertex = {p.edge_a[0], p.edge_a[1], -1};
+    contact.weight = {1 - closest.s, closest.s, 0};
+    contact.count = 2;
+    add(contact, closest.point_a - closest.point_b,
+        (1 - closest.u) * velocity(p.edge_b[0]) + closest.u * velocity(p.edge_b[1]));
   }
   // An edge's or triangle's contact whose every vertex has its own contact in that direction
   // would over-determine the solve (penalties with different targets fighting): dropped.
@@ -538,11 +539,7 @@ CollisionCounters CollisionPipeline::resolve(const std::vector<Vec3>& start, Sca
   CollisionCounters counters;
   const auto begin = Clock::now();
   for (int v = 0; v < m.cloth_vertices; ++v) m.start[v] = start[v];
-  for (const auto& mo : m.obstacles) {
-    const auto now = posed_vertices(*mo.obstacle, t), next = posed_vertices(*mo.obstacle, t + h);
-    std::copy(now.begin(), now.end(), m.start.begin() + mo.first_vertex);
-    std::copy(next.begin(), next.end(), m.end.begin() + mo.first_vertex);
-  }
+  m.pose_obstacles(t, h);
   const Scalar separation = m.settings.separation_fraction * m.model.scene.collisions.thickness / h;
 
   // Proximity repulsion on the first round's candidates, then CCD impulses until no collision.

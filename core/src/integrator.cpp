@@ -60,6 +60,7 @@ struct Integrator::Workspace {
   std::vector<SolveContact> contacts;
   std::vector<std::array<std::array<std::array<int, 3>, 3>, 3>> contact_blocks;  // [contact][i][j]: block (vertex i, vertex j)
   std::vector<Scalar> contact_holds, contact_impulses;
+  std::vector<Scalar> assembled;  // the matrix's values before the contacts' penalties and friction
   std::vector<Scalar> scale;  // per free vertex: its diagonal block's largest entry before penalties
   Scalar contact_work = 0;           // J: what the held contacts did at moving obstacles in the last solve
   std::vector<Scalar> normal_force;  // per vertex, N: what its contacts pushed with in the last solve
@@ -227,11 +228,6 @@ StepReport Integrator::advance(State& state) {
   for (int v = 0; v < n; ++v)
     w.forces[v] = m.masses[v] * m.scene.gravity - m.air_damping[v] * m.masses[v] * (state.velocities[v] - air_velocity);
   if (m.scene.wind) add_wind(m, state, w.forces);
-  // The explicit forces (gravity and the wind's drag; the air's damping is implicit) and the
-  // start velocities: the solvers' and the response's re-solve.
-  w.explicit_forces = w.forces;
-  for (int v = 0; v < n; ++v) w.explicit_forces[v] += m.air_damping[v] * m.masses[v] * (state.velocities[v] - air_velocity);
-  w.start_velocities = state.velocities;
   // With wind, the air's forces may put energy in: kept apart for the step's energy ledger.
   std::vector<Vec3> air_forces;
   if (m.scene.wind) {
@@ -239,7 +235,7 @@ StepReport Integrator::advance(State& state) {
     for (int v = 0; v < n; ++v) air_forces[v] -= m.masses[v] * m.scene.gravity;
   }
   if (m.scene.solver.kind == SolverKind::Cholmod) find_contacts(state);
-  else work_->contacts.clear();
+  else w.contacts.clear();
   if (!(projective_ ? solve_projective(state, pinned_dv, report) : solve_linearised(state, pinned_dv, report)))
     return report;
   report.external_work = source_work(pinned_dv, air_forces, state.velocities) + (projective_ ? 0 : w.contact_work);
@@ -270,7 +266,7 @@ StepReport Integrator::advance(State& state) {
   const int first_contacts = report.obstacle_contacts;
   if (changed) {
     if (projective_) spread_projective(state.positions, solved, motion, state.velocities, report);
-    else spread_response(state.positions, solved, held, motion, state.velocities, report);
+    else spread_response(solved, held, motion, state.velocities, report);
     if (!report.ok) return report;
     respond(state, motion, report);
   }
@@ -398,6 +394,9 @@ bool Integrator::solve_linearised(State& state, const std::vector<Vec3>& pinned_
     const int a = w.free_index[v];
     if (a >= 0) w.rhs.segment<3>(3 * a) = h * (w.forces[v] + h * stiffness_times_v[v]) - coupling[v];
   }
+  // The matrix as assembled, kept for the response's re-solve (spread_response) when the
+  // contacts' penalties and friction are about to change it.
+  if (!w.contacts.empty()) w.assembled.assign(w.matrix.valuePtr(), w.matrix.valuePtr() + w.matrix.nonZeros());
   // Each free vertex's own scale in the system, for the penalties that hold it: its diagonal
   // block's largest entry (the mass, or h^2 k where springs are stiffer), before any penalty.
   w.scale.resize(std::size_t(w.free_count));
@@ -450,7 +449,7 @@ bool Integrator::solve_linearised(State& state, const std::vector<Vec3>& pinned_
     Vec3 surface;  // the obstacle's velocity
   };
   std::vector<Friction> frictions;  // on moving obstacles, for the work they do
-  if (mu > 0) {
+  if (mu > 0 && !w.contacts.empty()) {
     std::vector<int> strongest(std::size_t(n), -1);  // vertex -> its contact of largest weight
     std::vector<Scalar> weight(std::size_t(n), 0);
     for (std::size_t k = 0; k < w.contacts.size(); ++k)
@@ -540,6 +539,12 @@ bool Integrator::solve_projective(State& state, const std::vector<Vec3>& pinned_
   Workspace& w = *work_;
   const Scalar h = h_;
   const std::size_t n = m.vertex_count();
+  // The explicit forces: gravity and the wind's drag; the air's damping is in the system.
+  const Vec3 air_velocity = m.scene.wind ? m.scene.wind->velocity : Vec3::Zero();
+  w.explicit_forces = w.forces;
+  for (std::size_t v = 0; v < n; ++v)
+    w.explicit_forces[v] += m.air_damping[v] * m.masses[v] * (state.velocities[v] - air_velocity);
+  w.start_velocities = state.velocities;
   // The springs' forces at the step's start on the pinned vertices, for the ledger (source_work).
   if (!m.pins.empty())
     for (const Spring& s : m.springs) {
@@ -678,17 +683,15 @@ bool Integrator::solve(StepReport& report, const std::string& failure, const Vec
   return solved.ok;
 }
 
-void Integrator::spread_response(const std::vector<Vec3>& start, const std::vector<Vec3>& solved,
-                                 const std::vector<char>& held, std::vector<Vec3>& motion, std::vector<Vec3>& velocities,
+void Integrator::spread_response(const std::vector<Vec3>& solved, const std::vector<char>& held, std::vector<Vec3>& motion, std::vector<Vec3>& velocities,
                                  StepReport& report) {
   const Model& m = model_;
   Workspace& w = *work_;
   const int n = int(m.vertex_count());
-  // The step's system as the solve assembled it at the start, without its contacts and
-  // friction (the held vertices are what the response made of them), and the held vertices'
-  // changes as penalties: linear in those changes, motion and velocities apart.
-  std::vector<Vec3> unused(static_cast<std::size_t>(n), Vec3::Zero());
-  assemble(start, w.start_velocities, unused);
+  // The step's system as the solve assembled it, without its contacts and friction (the held
+  // vertices are what the response made of them), and the held vertices' changes as penalties:
+  // linear in those changes, motion and velocities apart.
+  if (!w.contacts.empty()) std::copy(w.assembled.begin(), w.assembled.end(), w.matrix.valuePtr());
   VectorX velocity_rhs = VectorX::Zero(w.rhs.size());
   w.rhs.setZero();
   for (int v = 0; v < n; ++v) {
@@ -727,7 +730,7 @@ bool Integrator::iterate_projective(const std::vector<Vec3>& start, std::vector<
   return ok;
 }
 
-bool Integrator::spread_projective(const std::vector<Vec3>& start, const std::vector<Vec3>& solved,
+void Integrator::spread_projective(const std::vector<Vec3>& start, const std::vector<Vec3>& solved,
                                    std::vector<Vec3>& motion, std::vector<Vec3>& velocities, StepReport& report) {
   const Model& m = model_;
   const Workspace& w = *work_;
@@ -736,7 +739,6 @@ bool Integrator::spread_projective(const std::vector<Vec3>& start, const std::ve
   HeldVertices held;
   for (std::size_t v = 0; v < n; ++v)
     if (w.free_index[v] >= 0 && (motion[v] != solved[v] || velocities[v] != solved[v])) held.vertices.push_back(int(v));
-  if (held.vertices.empty()) return false;
   // The same step (its start, velocities and forces as the first solve had them), from the
   // responded positions, with the contact vertices held; once for each of motion and velocity.
   const auto spread = [&](std::vector<Vec3>& result) {
@@ -752,7 +754,6 @@ bool Integrator::spread_projective(const std::vector<Vec3>& start, const std::ve
     return true;
   };
   if (spread(motion)) spread(velocities);
-  return true;
 }
 
 Scalar kinetic_energy(const Model& model, const State& state) {

@@ -88,13 +88,14 @@ class Integrator {
   // time and iterations added to report, and on failure report says so (failure, then why).
   // With again, solves for that right-hand side with the last solve's matrix instead.
   bool solve(StepReport& report, const std::string& failure, const VectorX* again = nullptr);
-  // The collision response spread through the step: the system assembled again at the step's
-  // start (without the contacts' penalties), solved with each held vertex (those the response
-  // moved by more than a negligible distance) kept by a penalty at its new motion, then (the
-  // same factorisation) at its new velocity, from the solve's velocities (solved); motion and
-  // velocities of the others receive the results, and report says why when the solve fails.
-  void spread_response(const std::vector<Vec3>& start, const std::vector<Vec3>& solved, const std::vector<char>& held,
-                       std::vector<Vec3>& motion, std::vector<Vec3>& velocities, StepReport& report);
+  // The collision response spread through the step: the system as the solve assembled it
+  // (without the contacts' penalties and friction), solved with each held vertex (those the
+  // response moved by more than a negligible distance) kept by a penalty at its new motion,
+  // then (the same factorisation) at its new velocity, from the solve's velocities (solved);
+  // motion and velocities of the others receive the results, and report says why when the
+  // solve fails.
+  void spread_response(const std::vector<Vec3>& solved, const std::vector<char>& held, std::vector<Vec3>& motion,
+                       std::vector<Vec3>& velocities, StepReport& report);
   // The linearised system's matrix M (1 + h a) - h dF/dv - h^2 dF/dx over the free vertices,
   // assembled at positions x and velocities v into the workspace; the springs' forces added to
   // forces, and when asked dF/dx v into stiffness_times_v and the matrix's coupling to the
@@ -119,7 +120,7 @@ class Integrator {
   // spread_response's counterpart for the projective solver: the step solved again with the
   // contact vertices held to their new end positions (the motion), then to where their new
   // velocities would take them (the velocities); start is the step's start.
-  bool spread_projective(const std::vector<Vec3>& start, const std::vector<Vec3>& solved, std::vector<Vec3>& motion,
+  void spread_projective(const std::vector<Vec3>& start, const std::vector<Vec3>& solved, std::vector<Vec3>& motion,
                          std::vector<Vec3>& velocities, StepReport& report);
   // One step of size h_, unchecked.
   StepReport advance(State& state);
