@@ -8,7 +8,11 @@
 #include <cstdlib>
 #include <filesystem>
 #include <functional>
+#include <limits>
+#include <optional>
 #include <string>
+
+#include "drape/render/renderer.h"
 
 namespace drape::app {
 
@@ -45,6 +49,13 @@ struct RenderOptions {
   int width = 0, height = 0;  ///< 0: the scene's
   bool video = true;
   bool quiet = false;
+  int first_frame = 0, last_frame = std::numeric_limits<int>::max();  ///< the frames to render
+  std::optional<int> still;             ///< render this frame alone, no video
+  std::filesystem::path still_output;   ///< the still's file; empty: FOLDER/render/frame_NNNNN.png
+  std::optional<Vec3> camera_position, camera_target, camera_up;  ///< over the scene's camera
+  std::optional<double> fov;
+  std::optional<render::Look::Style> style;
+  bool wireframe = false;
 };
 /// Renders a run folder's saved frames; returns the exit status.
 int render_run(const std::filesystem::path& folder, const RenderOptions& options);

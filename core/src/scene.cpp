@@ -204,7 +204,7 @@ Box read_box(const Node& n) {
 }
 
 ClothSpec read_cloth(const Node& n) {
-  n.allow({"mesh", "grid", "transform", "material", "velocity"});
+  n.allow({"mesh", "grid", "transform", "material", "velocity", "render"});
   ClothSpec c;
   if (n.has("grid") == n.has("mesh")) n.fail("expected exactly one of 'grid' (the built-in generator) or 'mesh' (a file)");
   if (n.has("grid")) {
@@ -231,6 +231,11 @@ ClothSpec read_cloth(const Node& n) {
   }
   if (n.has("transform")) c.transform = read_transform(n.at("transform"));
   if (n.has("velocity")) c.velocity = n.at("velocity").vec3_within(MAX_SPEED, "m/s");
+  if (n.has("render")) {
+    const Node r = n.at("render");
+    if (!r.raw().is_object()) r.fail("expected an object");
+    c.render_json = r.raw().dump();
+  }
   if (n.has("material")) {
     const Node m = n.at("material");
     m.allow({"density", "stretch", "shear", "bend", "damping", "air_damping"});

@@ -25,6 +25,9 @@ void write_png(const std::filesystem::path& path, const Image& image) {
   png_init_io(png, file);
   png_set_IHDR(png, info, image.width, image.height, 8, PNG_COLOR_TYPE_RGB, PNG_INTERLACE_NONE,
                PNG_COMPRESSION_TYPE_DEFAULT, PNG_FILTER_TYPE_DEFAULT);
+  // zlib level 3: half the time of the default level 6 on a shaded frame, for about a fifth
+  // more bytes.
+  png_set_compression_level(png, 3);
   png_write_info(png, info);
   for (int y = 0; y < image.height; ++y)
     png_write_row(png, const_cast<png_bytep>(image.rgb.data() + std::size_t(y) * image.width * 3));

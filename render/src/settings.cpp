@@ -16,8 +16,38 @@ constexpr int MIN_SIZE = 16, MAX_SIZE = 8192;
 constexpr int MAX_SAMPLES = 4;
 constexpr double MAX_SUPERSAMPLED_PIXELS = 64e6;
 
+[[noreturn]] void fail_at(const Scene& scene, const std::string& path, const std::string& what) {
+  throw RenderError(scene.file.string() + ": " + path + ": " + what);
+}
+
 [[noreturn]] void fail(const Scene& scene, const std::string& path, const std::string& what) {
-  throw RenderError(scene.file.string() + ": /render" + path + ": " + what);
+  fail_at(scene, "/render" + path, what);
+}
+
+// A colour as [r, g, b] from 0 to 1 or as "#rrggbb"; path is the full JSON path.
+Colour colour(const Scene& scene, const json& v, const std::string& path) {
+  const std::string expected = "expected [r, g, b] with each from 0 to 1, or \"#rrggbb\", found " + v.dump();
+  Colour c{};
+  if (v.is_string()) {
+    const std::string text = v.get<std::string>();
+    if (text.size() != 7 || text[0] != '#' || text.find_first_not_of("0123456789abcdefABCDEF", 1) != std::string::npos)
+      fail_at(scene, path, expected);
+    for (int k = 0; k < 3; ++k) c[k] = float(std::stoi(text.substr(1 + 2 * k, 2), nullptr, 16)) / 255.0f;
+    return c;
+  }
+  if (!v.is_array() || v.size() != 3) fail_at(scene, path, expected);
+  for (int k = 0; k < 3; ++k) {
+    if (!v[k].is_number() || !(v[k].get<double>() >= 0 && v[k].get<double>() <= 1)) fail_at(scene, path, expected);
+    c[k] = float(v[k].get<double>());
+  }
+  return c;
+}
+
+// A pale version of a front colour, for a back the scene does not give.
+Colour pale(const Colour& front) {
+  Colour c{};
+  for (int k = 0; k < 3; ++k) c[k] = 0.35f * front[k] + 0.65f * 0.95f;
+  return c;
 }
 
 double number(const Scene& scene, const json& v, const std::string& path) {
@@ -40,13 +70,49 @@ Vec3 vec3(const Scene& scene, const json& v, const std::string& path) {
 
 }  // namespace
 
+ClothColours palette_colours(std::size_t index) {
+  // Front hues far apart in a cycle of six; the backs pale or warm enough to tell from any front.
+  static const ClothColours PALETTE[] = {
+      {{0.80f, 0.22f, 0.18f}, {0.95f, 0.78f, 0.30f}},  // red, yellow back
+      {{0.18f, 0.36f, 0.78f}, {0.62f, 0.80f, 0.96f}},  // blue, pale blue back
+      {{0.20f, 0.58f, 0.30f}, {0.74f, 0.92f, 0.58f}},  // green, pale green back
+      {{0.55f, 0.26f, 0.66f}, {0.93f, 0.70f, 0.88f}},  // purple, pink back
+      {{0.88f, 0.50f, 0.10f}, {0.98f, 0.88f, 0.66f}},  // orange, cream back
+      {{0.10f, 0.58f, 0.62f}, {0.66f, 0.93f, 0.90f}},  // teal, pale teal back
+  };
+  return PALETTE[index % std::size(PALETTE)];
+}
+
 RenderSettings parse_render_settings(const Scene& scene) {
   RenderSettings s;
+  for (std::size_t i = 0; i < scene.cloths.size(); ++i) {
+    ClothColours colours = palette_colours(i);
+    if (!scene.cloths[i].render_json.empty()) {
+      const std::string path = "/cloths/" + std::to_string(i) + "/render";
+      const json r = json::parse(scene.cloths[i].render_json);
+      for (const auto& [key, value] : r.items())
+        if (key != "color" && key != "back_color" && key != "comment")
+          fail_at(scene, path + "/" + key, "unknown key (expected one of: color, back_color)");
+      if (r.contains("color")) colours.front = colour(scene, r["color"], path + "/color"), colours.back = pale(colours.front);
+      if (r.contains("back_color")) colours.back = colour(scene, r["back_color"], path + "/back_color");
+    }
+    s.look.cloths.push_back(colours);
+  }
   if (scene.render_json.empty()) return s;
   const json r = json::parse(scene.render_json);
   for (const auto& [key, value] : r.items())
-    if (key != "camera" && key != "resolution" && key != "fps" && key != "samples" && key != "enabled" && key != "comment")
-      fail(scene, "/" + key, "unknown key (expected one of: camera, resolution, fps, samples, enabled)");
+    if (key != "camera" && key != "resolution" && key != "fps" && key != "samples" && key != "enabled" && key != "style" &&
+        key != "wireframe" && key != "comment")
+      fail(scene, "/" + key, "unknown key (expected one of: camera, resolution, fps, samples, enabled, style, wireframe)");
+  if (r.contains("style")) {
+    const json& v = r["style"];
+    if (!v.is_string() || (v != "shaded" && v != "simple")) fail(scene, "/style", "expected \"shaded\" or \"simple\", found " + v.dump());
+    s.look.style = v == "simple" ? Look::Style::Simple : Look::Style::Shaded;
+  }
+  if (r.contains("wireframe")) {
+    if (!r["wireframe"].is_boolean()) fail(scene, "/wireframe", "expected true or false");
+    s.look.wireframe = r["wireframe"].get<bool>();
+  }
   if (r.contains("resolution")) {
     const json& v = r["resolution"];
     if (!v.is_array() || v.size() != 2 || !v[0].is_number_integer() || !v[1].is_number_integer())

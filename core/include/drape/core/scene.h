@@ -89,6 +89,7 @@ struct ClothSpec {
   Transform transform;
   Material material;
   Vec3 velocity = Vec3::Zero();  ///< initial velocity of every vertex (m/s)
+  std::string render_json;       ///< the cloth's render section (its colours), kept verbatim for the renderer
 };
 
 struct Box {

@@ -5,6 +5,7 @@
 /// render/src/osmesa_renderer.cpp knows about it, and another back end (surfaceless EGL) can
 /// take its place.
 
+#include <array>
 #include <cstdint>
 #include <filesystem>
 #include <memory>
@@ -36,14 +37,41 @@ struct Camera {
   Scalar fov_degrees = 40;  ///< vertical field of view
 };
 
+/// A linear RGB colour, each channel from 0 to 1.
+using Colour = std::array<float, 3>;
+
+/// The two sides of a cloth. The front is the side its triangles' normals point to (counter-
+/// clockwise winding seen from the front).
+struct ClothColours {
+  Colour front, back;
+};
+
+/// The colours of cloth number `index` in a scene without its own: a palette of distinct
+/// hues, each with a pale back (cloth 0: red front, yellow back).
+ClothColours palette_colours(std::size_t index);
+
+/// How a frame looks.
+struct Look {
+  enum class Style {
+    Shaded,  ///< shadows from the key light, per-pixel lighting, an endless ground with a grid in metres
+    Simple,  ///< fixed-function lighting, no shadows, a plain finite ground: the look before shadows, cheaper
+  };
+  Style style = Style::Shaded;
+  bool wireframe = false;              ///< the cloth's triangle edges drawn over it
+  std::vector<ClothColours> cloths;    ///< per cloth of the model; missing entries take palette_colours
+  ClothColours cloth(std::size_t index) const { return index < cloths.size() ? cloths[index] : palette_colours(index); }
+};
+
 /// The render section of a scene: {"camera": {"position", "target", "up", "fov"},
-/// "resolution": [w, h], "fps", "samples", "enabled"}; every key optional.
+/// "resolution": [w, h], "fps", "samples", "enabled", "style", "wireframe"}, and each cloth's
+/// {"render": {"color", "back_color"}}; every key optional.
 struct RenderSettings {
   std::optional<Camera> camera;  ///< absent: framed automatically from the scene's extent
   int width = 1280, height = 720;
   int samples = 2;     ///< supersampling factor per axis (anti-aliasing)
   double fps = 0;      ///< video frame rate; 0: 1 / frame_time
   bool enabled = false;  ///< render during drape run without --render
+  Look look;
 };
 
 /// Reads and validates a scene's render section (kept verbatim in Scene::render_json).
@@ -56,9 +84,10 @@ Camera frame_scene(const Model& model, Scalar aspect);
 class Renderer {
  public:
   virtual ~Renderer() = default;
-  /// The cloth (front and back faces in distinct colours), the obstacles at time t and the
-  /// ground plane, softly lit.
-  virtual Image render(const Model& model, const std::vector<Vec3>& cloth_positions, Scalar t, const Camera& camera) = 0;
+  /// The cloths (front and back faces in distinct colours), the obstacles at time t and the
+  /// planes, lit by a key light (casting shadows in the shaded style), a fill light and the sky.
+  virtual Image render(const Model& model, const std::vector<Vec3>& cloth_positions, Scalar t, const Camera& camera,
+                       const Look& look = {}) = 0;
 };
 
 /// The OSMesa renderer at width x height (rendered at samples times that and filtered down).
