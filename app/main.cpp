@@ -22,7 +22,8 @@ int main(int argc, char** argv) {
       "  drape render out/drape_sphere                  PNG frames and an MP4 of a finished run\n"
       "  drape check-stats out/flag/stats.csv golden.csv compare frame statistics\n"
       "  drape ccd tests/data/ccd-queries               compare the CCD methods on ground truth\n"
-      "  drape sweep scenes/cloth_fold.json             time against accuracy over a grid of settings");
+      "  drape sweep scenes/cloth_fold.json             time against accuracy over a grid of settings\n"
+      "  drape batch runs.json                          a list of scene runs (mpirun -np 4 drape batch ...)");
 
   std::map<std::string, drape::app::Command> commands;
   commands["run"] = drape::app::add_run_command(app);
@@ -32,6 +33,7 @@ int main(int argc, char** argv) {
   commands["check-stats"] = drape::app::add_check_stats_command(app);
   commands["ccd"] = drape::app::add_ccd_command(app);
   commands["sweep"] = drape::app::add_sweep_command(app);
+  commands["batch"] = drape::app::add_batch_command(app);
 
   try {
     app.parse(argc, argv);

@@ -1,9 +1,12 @@
 // drape sweep: a scene over a grid of accuracy settings against a reference run (core/sweep.h).
+#include <atomic>
+#include <csignal>
 #include <cstdio>
 #include <iostream>
 
 #include "commands.h"
 #include "drape/core/sweep.h"
+#include "ranks.h"
 
 namespace drape::app {
 namespace {
@@ -22,7 +25,10 @@ struct SweepArguments {
   bool plot = true;
 };
 
-int sweep(const SweepArguments& args) {
+std::atomic<bool> sweep_interrupted{false};
+extern "C" void on_sweep_interrupt(int) { sweep_interrupted.store(true); }
+
+int sweep(const SweepArguments& args, const Ranks& ranks) {
   Scene scene;
   try {
     scene = load_scene(args.scene);
@@ -65,35 +71,78 @@ int sweep(const SweepArguments& args) {
                *std::max_element(grid.max_zone_iterations.begin(), grid.max_zone_iterations.end()));
 
   const std::string name = std::filesystem::path(args.scene).stem().string();
-  const std::filesystem::path out = args.out.empty() ? std::filesystem::path("out") / (name + "_sweep") : std::filesystem::path(args.out);
-  std::error_code error;
-  std::filesystem::create_directories(out, error);
-  if (error || !std::filesystem::is_directory(out)) {
-    std::cerr << "drape sweep: " << out.string() << ": cannot create the output folder\n";
-    return EXIT_BAD_INPUT;
-  }
-  const auto settings = grid.settings();
-  std::printf("drape sweep %s: %zu settings and the reference (%s), %d frames each\n", args.scene.c_str(),
-              settings.size(), reference.label().c_str(), args.frames);
-  std::fflush(stdout);
-  std::vector<SweepResult> results;
-  try {  // run_sweep stops after the reference when the reference fails
-    results = run_sweep(scene, reference, settings, args.frames, [&](const SweepResult& r, std::size_t done, std::size_t total) {
-      std::printf("[%zu/%zu] %-72s %9.1f ms/frame  rms %.3e m  max %.3e m  pen %ld%s%s\n", done, total,
-                  (r.reference ? "reference " + r.setting.label() : r.setting.label()).c_str(), r.wall_ms_per_frame,
-                  r.rms_error, r.max_error, r.penetrations, r.failed ? "  FAILED: " : "", r.failure.c_str());
-      std::fflush(stdout);
-    });
-    write_sweep_csv(out / "sweep.csv", results);
-    if (results.front().failed) {
-      std::cerr << "drape sweep: the reference run stopped at " << results.front().failure
-                << "; nothing to compare with (" << (out / "sweep.csv").string() << " holds what it did)\n";
-      return EXIT_RUN_STOPPED;
+  SweepPlan plan;
+  plan.scene = scene;
+  plan.reference = reference;
+  plan.settings = grid.settings();
+  plan.frames = args.frames;
+  plan.out = args.out.empty() ? std::filesystem::path("out") / (name + "_sweep") : std::filesystem::path(args.out);
+  std::vector<std::size_t> pending;
+  if (ranks.rank() == 0) {
+    std::error_code error;
+    std::filesystem::create_directories(plan.out, error);
+    if (error || !std::filesystem::is_directory(plan.out)) {
+      std::cerr << "drape sweep: " << plan.out.string() << ": cannot create the output folder\n";
+      return ranks.broadcast(EXIT_BAD_INPUT);
     }
-  } catch (const std::runtime_error& e) {  // a scene a setting makes invalid, or an unwritable table
-    std::cerr << "drape sweep: " << e.what() << "\n";
-    return EXIT_BAD_INPUT;
+    for (std::size_t i = 0; i < plan.size(); ++i)
+      if (!sweep_run_done(plan, i)) pending.push_back(i);
+    std::printf("drape sweep %s: %zu settings and the reference (%s), %d frames each; %zu runs kept already, %zu to run on "
+                "%d %s\n",
+                args.scene.c_str(), plan.settings.size(), reference.label().c_str(), args.frames, plan.size() - pending.size(),
+                pending.size(), ranks.size(), ranks.size() == 1 ? "process" : "MPI ranks");
+    std::fflush(stdout);
   }
+  if (ranks.broadcast(EXIT_OK) != EXIT_OK) return EXIT_BAD_INPUT;
+
+  std::signal(SIGINT, on_sweep_interrupt);
+  std::signal(SIGTERM, on_sweep_interrupt);
+  std::string error_message;
+  ranks.run(pending, [&](std::size_t i) {
+    std::optional<SweepResult> r;
+    try {
+      r = run_sweep_run(plan, i, sweep_interrupted);
+    } catch (const std::runtime_error& e) {  // a scene a setting makes invalid, or a run that cannot be kept
+      std::fprintf(stderr, "%sdrape sweep: %s\n", ranks.prefix().c_str(), e.what());
+      return true;  // missing from the table; the others go on
+    }
+    if (!r) return false;
+    std::printf("%s[run %zu/%zu] %-72s %9.1f ms/frame  pen %ld%s%s\n", ranks.prefix().c_str(), i, plan.size() - 1,
+                (i == 0 ? "reference " + r->setting.label() : r->setting.label()).c_str(), r->wall_ms_per_frame,
+                r->penetrations, r->failed ? "  FAILED: " : "", r->failure.c_str());
+    std::fflush(stdout);
+    return true;
+  });
+  if (ranks.rank() != 0) return ranks.broadcast(EXIT_OK);
+
+  // Rank 0: every kept run against the reference, in the grid's order.
+  std::vector<SweepResult> results;
+  try {
+    results = gather_sweep(plan);
+    write_sweep_csv(plan.out / "sweep.csv", results);
+  } catch (const std::runtime_error& e) {
+    std::cerr << "drape sweep: " << e.what() << "\n";
+    return ranks.broadcast(EXIT_BAD_INPUT);
+  }
+  const std::filesystem::path out = plan.out;
+  if (results.empty() || results.front().failed) {
+    std::cerr << "drape sweep: "
+              << (results.empty() ? std::string("the reference run was not done") : "the reference run stopped at " + results.front().failure)
+              << "; nothing to compare with (" << (out / "sweep.csv").string() << " holds what it did)\n";
+    return ranks.broadcast(EXIT_RUN_STOPPED);
+  }
+  if (results.size() < plan.size()) {
+    std::cerr << "drape sweep: " << plan.size() - results.size()
+              << " runs not done (interrupted, or a setting the scene refuses); start the same command again to run only "
+                 "those\n";
+    ranks.broadcast(EXIT_RUN_STOPPED);
+    return EXIT_RUN_STOPPED;
+  }
+  for (const SweepResult& r : results)
+    std::printf("%-82s %9.1f ms/frame  rms %.3e m  max %.3e m  pen %ld%s%s\n",
+                (r.reference ? "reference " + r.setting.label() : r.setting.label()).c_str(), r.wall_ms_per_frame, r.rms_error,
+                r.max_error, r.penetrations, r.failed ? "  FAILED: " : "", r.failure.c_str());
+  ranks.broadcast(EXIT_OK);
   std::printf("\nPareto front (fastest first; no other run is both faster and closer to the reference):\n");
   std::vector<const SweepResult*> front;
   for (const SweepResult& r : results)
@@ -153,7 +202,16 @@ Command add_sweep_command(CLI::App& app) {
       "  drape sweep scenes/cloth_fold.json --frames 30 --steps 5,10,20 --solvers cholmod,cg:1e-3,cg:1e-6\n"
       "Runs that stop count as failed; a run is on the Pareto front when it did not fail, has no penetration, and no\n"
       "other such run is both faster and closer to the reference. docs/sweep.md explains how to read the result.");
-  return [args] { return sweep(*args); };
+  return [args] {
+    try {
+      const Ranks ranks;
+      const int status = sweep(*args, ranks);
+      return status;
+    } catch (const std::runtime_error& e) {
+      std::cerr << "drape sweep: " << e.what() << "\n";
+      return EXIT_BAD_INPUT;
+    }
+  };
 }
 
 }  // namespace drape::app

@@ -22,6 +22,7 @@ PACKAGES=(
   libpng-dev           # PNG frames
   ffmpeg               # MP4 encoding
   gnuplot-nox          # the time-against-error plot of drape sweep (PNG)
+  openmpi-bin libopenmpi-dev  # drape batch and drape sweep across MPI ranks (mpirun, srun)
   clang libclang-rt-14-dev  # libFuzzer targets (tools/fuzz.sh)
 )
 

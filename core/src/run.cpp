@@ -114,6 +114,24 @@ void prepare_run_folder(const std::filesystem::path& out, bool overwrite) {
   }
 }
 
+}  // namespace
+
+void remove_run_folder(const std::filesystem::path& out) {
+  try {
+    for (const auto& entry : std::filesystem::directory_iterator(out))
+      if (!is_run_file(entry))
+        throw RunSetupError(out.string() + ": holds " + entry.path().filename().string() +
+                            ", which drape did not write; move it, or give the run another folder");
+  } catch (const std::filesystem::filesystem_error& e) {
+    throw RunSetupError(out.string() + ": cannot list the folder: " + e.code().message());
+  }
+  std::error_code error;
+  std::filesystem::remove_all(out, error);
+  if (error) throw RunSetupError(out.string() + ": cannot remove the earlier run: " + error.message());
+}
+
+namespace {
+
 // The scene copy and its meshes, read before anything in the folder is removed (the scene may
 // be the copy of the run it replaces).
 struct RunInputs {

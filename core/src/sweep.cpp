@@ -13,7 +13,10 @@
 #include <sstream>
 #include <stdexcept>
 
+#include <nlohmann/json.hpp>
+
 #include "drape/core/integrator.h"
+#include "drape/core/output_file.h"
 #include "drape/core/penetration.h"
 
 namespace drape {
@@ -119,7 +122,48 @@ struct Trajectory {
   std::vector<Scalar> energy;
 };
 
-SweepResult simulate(const Scene& scene, const SweepSetting& setting, int frames, Trajectory& trajectory) {
+// A trajectory's file: a line naming the format, the frame and vertex counts, then per frame
+// its energy and positions as native doubles (the file is read back on the machine, or the
+// cluster, that wrote it).
+constexpr const char* TRAJECTORY_MAGIC = "drape trajectory 1\n";
+
+std::string trajectory_bytes(const Trajectory& t) {
+  std::string bytes = TRAJECTORY_MAGIC;
+  const std::uint64_t frames = t.positions.size(), vertices = frames ? t.positions[0].size() : 0;
+  bytes.append(reinterpret_cast<const char*>(&frames), sizeof frames);
+  bytes.append(reinterpret_cast<const char*>(&vertices), sizeof vertices);
+  for (std::size_t f = 0; f < frames; ++f) {
+    const double e = t.energy[f];
+    bytes.append(reinterpret_cast<const char*>(&e), sizeof e);
+    for (const Vec3& p : t.positions[f]) bytes.append(reinterpret_cast<const char*>(p.data()), 3 * sizeof(double));
+  }
+  return bytes;
+}
+
+std::optional<Trajectory> read_trajectory(const std::filesystem::path& path) {
+  std::ifstream in(path, std::ios::binary);
+  std::string magic(std::char_traits<char>::length(TRAJECTORY_MAGIC), '\0');
+  std::uint64_t frames = 0, vertices = 0;
+  if (!in.read(magic.data(), std::streamsize(magic.size())) || magic != TRAJECTORY_MAGIC ||
+      !in.read(reinterpret_cast<char*>(&frames), sizeof frames) || !in.read(reinterpret_cast<char*>(&vertices), sizeof vertices) ||
+      frames > (1u << 24) || vertices > (1u << 28))
+    return std::nullopt;
+  Trajectory t;
+  t.positions.assign(frames, std::vector<Vec3>(vertices));
+  t.energy.resize(frames);
+  for (std::size_t f = 0; f < frames; ++f) {
+    double e = 0;
+    if (!in.read(reinterpret_cast<char*>(&e), sizeof e)) return std::nullopt;
+    t.energy[f] = e;
+    for (Vec3& p : t.positions[f])
+      if (!in.read(reinterpret_cast<char*>(p.data()), 3 * sizeof(double))) return std::nullopt;
+  }
+  return t;
+}
+
+// Returns nullopt when interrupted.
+std::optional<SweepResult> simulate(const Scene& scene, const SweepSetting& setting, int frames, Trajectory& trajectory,
+                                    const std::atomic<bool>& interrupt) {
   SweepResult result;
   result.setting = setting;
   const Model model = build_model(with_setting(scene, setting));
@@ -134,6 +178,7 @@ SweepResult simulate(const Scene& scene, const SweepSetting& setting, int frames
   for (int frame = 1; frame <= frames && !result.failed; ++frame) {
     const auto begin = std::chrono::steady_clock::now();
     for (int step = 0; step < model.scene.frame_steps; ++step) {
+      if (interrupt.load()) return std::nullopt;
       const StepReport r = integrator.step(state);
       if (!r.ok) {
         result.failed = true;
@@ -167,25 +212,90 @@ void compare(SweepResult& r, const Trajectory& run, const Trajectory& reference)
   r.rms_error = count ? std::sqrt(squares / double(count)) : 0;
 }
 
+std::filesystem::path run_folder(const SweepPlan& plan, std::size_t run) {
+  char name[32];
+  std::snprintf(name, sizeof name, "run_%03zu", run);
+  return plan.out / "runs" / name;
+}
+
+// What a kept run must match to count for this plan's run.
+nlohmann::json identity(const SweepPlan& plan, std::size_t run) {
+  // FNV-1a of the scene's text: a scene edited since is run again.
+  std::uint64_t h = 1469598103934665603ull;
+  for (const unsigned char c : plan.scene.text) h = (h ^ c) * 1099511628211ull;
+  return {{"setting", plan.setting(run).label()}, {"reference", run == 0}, {"frames", plan.frames},
+          {"scene", plan.scene.file.string()}, {"scene_text_hash", std::to_string(h)}};
+}
+
+std::optional<SweepResult> read_result(const SweepPlan& plan, std::size_t run) {
+  std::ifstream in(run_folder(plan, run) / "result.json");
+  if (!in) return std::nullopt;
+  try {
+    nlohmann::json j;
+    in >> j;
+    if (j.at("identity") != identity(plan, run)) return std::nullopt;
+    SweepResult r;
+    r.setting = plan.setting(run);
+    r.reference = run == 0;
+    r.failed = j.at("failed");
+    r.failure = j.at("failure");
+    r.frames_done = j.at("frames_done");
+    r.wall_ms_per_frame = j.at("wall_ms_per_frame");
+    r.energy_drift = j.at("energy_drift");
+    r.penetrations = j.at("penetrations");
+    return r;
+  } catch (const std::exception&) {
+    return std::nullopt;  // unreadable or of another version: run again
+  }
+}
+
 }  // namespace
 
-std::vector<SweepResult> run_sweep(const Scene& scene, const SweepSetting& reference_setting,
-                                   const std::vector<SweepSetting>& settings, int frames,
-                                   const std::function<void(const SweepResult&, std::size_t, std::size_t)>& on_result) {
+bool sweep_run_done(const SweepPlan& plan, std::size_t run) {
+  return read_result(plan, run) && std::filesystem::exists(run_folder(plan, run) / "trajectory.bin");
+}
+
+std::optional<SweepResult> run_sweep_run(const SweepPlan& plan, std::size_t run, const std::atomic<bool>& interrupt) {
+  Trajectory trajectory;
+  std::optional<SweepResult> result = simulate(plan.scene, plan.setting(run), plan.frames, trajectory, interrupt);
+  if (!result) return std::nullopt;
+  result->reference = run == 0;
+  // Kept in a partial folder renamed into place: a run is in runs/ whole or not at all.
+  const std::filesystem::path folder = run_folder(plan, run), partial = folder.string() + ".partial";
+  std::error_code error;
+  std::filesystem::remove_all(partial, error);
+  std::filesystem::create_directories(partial, error);
+  if (error) throw std::runtime_error(partial.string() + ": cannot create the run's folder: " + error.message());
+  write_file_atomically(partial / "trajectory.bin", trajectory_bytes(trajectory));
+  const nlohmann::json j = {{"identity", identity(plan, run)},
+                            {"failed", result->failed},
+                            {"failure", result->failure},
+                            {"frames_done", result->frames_done},
+                            {"wall_ms_per_frame", result->wall_ms_per_frame},
+                            {"energy_drift", result->energy_drift},
+                            {"penetrations", result->penetrations}};
+  write_file_atomically(partial / "result.json", j.dump(2) + "\n");
+  std::filesystem::remove_all(folder, error);
+  std::filesystem::rename(partial, folder, error);
+  if (error) throw std::runtime_error(folder.string() + ": cannot move the run into place: " + error.message());
+  return result;
+}
+
+std::vector<SweepResult> gather_sweep(const SweepPlan& plan) {
   std::vector<SweepResult> results;
-  const std::size_t total = settings.size() + 1;
-  Trajectory reference;
-  SweepResult ref = simulate(scene, reference_setting, frames, reference);
-  ref.reference = true;
-  results.push_back(ref);
-  if (on_result) on_result(results.back(), 1, total);
-  if (ref.failed) return results;
-  for (const SweepSetting& setting : settings) {
-    Trajectory trajectory;
-    SweepResult r = simulate(scene, setting, frames, trajectory);
-    compare(r, trajectory, reference);
-    results.push_back(r);
-    if (on_result) on_result(results.back(), results.size(), total);
+  const std::optional<SweepResult> reference = read_result(plan, 0);
+  if (!reference) return results;
+  results.push_back(*reference);
+  if (reference->failed) return results;  // nothing to compare with
+  const std::optional<Trajectory> reference_trajectory = read_trajectory(run_folder(plan, 0) / "trajectory.bin");
+  if (!reference_trajectory) throw std::runtime_error((run_folder(plan, 0) / "trajectory.bin").string() + ": unreadable");
+  for (std::size_t run = 1; run < plan.size(); ++run) {
+    std::optional<SweepResult> r = read_result(plan, run);
+    if (!r) continue;
+    const std::optional<Trajectory> trajectory = read_trajectory(run_folder(plan, run) / "trajectory.bin");
+    if (!trajectory) continue;
+    compare(*r, *trajectory, *reference_trajectory);
+    results.push_back(*r);
   }
   mark_pareto_front(results);
   return results;

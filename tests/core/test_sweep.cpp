@@ -1,8 +1,11 @@
 // The speed-accuracy sweep: the grid, the solver setting parser, the Pareto front, and runs
 // compared with the reference.
 #include <gtest/gtest.h>
+#include <unistd.h>
 
 #include <algorithm>
+#include <atomic>
+#include <filesystem>
 
 #include "drape/core/sweep.h"
 
@@ -86,12 +89,24 @@ TEST(Sweep, RunsAreMeasuredAgainstTheReference) {
   reference.method = ccd::Method::Conservative;
   SweepSetting coarse = reference;
   coarse.frame_steps = 1;
-  std::size_t calls = 0;
-  const auto results = run_sweep(scene, reference, {reference, coarse}, 3, [&](const SweepResult&, std::size_t done, std::size_t total) {
-    ++calls;
-    EXPECT_EQ(done, calls);
-    EXPECT_EQ(total, 3u);
-  });
+  SweepPlan plan;
+  plan.scene = scene;
+  plan.reference = reference;
+  plan.settings = {reference, coarse};
+  plan.frames = 3;
+  plan.out = std::filesystem::temp_directory_path() / ("drape_sweep_test_" + std::to_string(::getpid()));
+  std::filesystem::remove_all(plan.out);
+  const std::atomic<bool> go{false}, stop{true};
+  // Interrupted: nothing kept.
+  EXPECT_FALSE(run_sweep_run(plan, 2, stop));
+  EXPECT_FALSE(sweep_run_done(plan, 2));
+  // In any order, each kept when done.
+  for (const std::size_t run : {2u, 0u, 1u}) {
+    EXPECT_FALSE(sweep_run_done(plan, run));
+    ASSERT_TRUE(run_sweep_run(plan, run, go));
+    EXPECT_TRUE(sweep_run_done(plan, run));
+  }
+  const auto results = gather_sweep(plan);
   ASSERT_EQ(results.size(), 3u);
   EXPECT_TRUE(results[0].reference);
   for (const auto& r : results) {
@@ -107,4 +122,17 @@ TEST(Sweep, RunsAreMeasuredAgainstTheReference) {
   EXPECT_LT(results[0].energy_drift, 0.0);  // a swinging cloth falls: its energy goes to kinetic, then damping
   const std::string row = sweep_csv_row(results[2]), header = sweep_csv_header();
   EXPECT_EQ(std::count(row.begin(), row.end(), ','), std::count(header.begin(), header.end(), ','));
+  // A kept run counts only for the same plan: other frames, another setting or an edited scene
+  // are run again.
+  SweepPlan other = plan;
+  other.frames = 4;
+  EXPECT_FALSE(sweep_run_done(other, 0));
+  other = plan;
+  other.settings[1].frame_steps = 2;
+  EXPECT_FALSE(sweep_run_done(other, 2));
+  EXPECT_TRUE(sweep_run_done(other, 1));
+  other = plan;
+  other.scene.text += " ";
+  EXPECT_FALSE(sweep_run_done(other, 1));
+  std::filesystem::remove_all(plan.out);
 }

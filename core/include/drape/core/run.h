@@ -68,6 +68,10 @@ struct RunOutcome {
 std::filesystem::path mesh_path(const std::filesystem::path& out, int frame, const std::string& format);
 inline std::filesystem::path stats_path(const std::filesystem::path& out) { return out / "stats.csv"; }
 
+/// Removes a run folder: drape's files in it (as --overwrite would), then the folder itself.
+/// Throws RunSetupError, removing nothing, when it holds anything else.
+void remove_run_folder(const std::filesystem::path& out);
+
 /// Simulates and writes frame 0 (the initial state) then settings.frames frames: the meshes,
 /// stats.csv, and a copy of the scene (scene.json, its mesh paths pointing at copies of the
 /// meshes in meshes/, so the folder is complete by itself). An earlier run's files in the

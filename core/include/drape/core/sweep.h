@@ -3,8 +3,10 @@
 /// The speed-accuracy trade: a scene run over a grid of accuracy settings, each run compared
 /// with a reference run at the most accurate setting (drape sweep; docs/sweep.md).
 
+#include <atomic>
 #include <filesystem>
 #include <functional>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -58,13 +60,33 @@ struct SweepResult {
   bool pareto = false;           ///< on the front: no other successful run is both faster and closer
 };
 
-/// Runs the reference (reference_setting) then every setting for frames frames, with the
-/// independent penetration check on every frame. on_result is called after each run (the
-/// reference first). When the reference stops early only its result is returned: there is
-/// nothing to compare the others with.
-std::vector<SweepResult> run_sweep(const Scene& scene, const SweepSetting& reference_setting,
-                                   const std::vector<SweepSetting>& settings, int frames,
-                                   const std::function<void(const SweepResult&, std::size_t done, std::size_t total)>& on_result);
+/// A sweep's runs and where they are kept: run 0 is the reference, run i > 0 settings[i - 1].
+/// Each run keeps its trajectory (positions and energy at every frame) and its result in
+/// out/runs/run_NNN/, which appears whole by rename, so a sweep started again on the same
+/// output skips the runs already done, and the runs can be done in any order by any process.
+struct SweepPlan {
+  Scene scene;
+  SweepSetting reference;
+  std::vector<SweepSetting> settings;
+  int frames = 0;
+  std::filesystem::path out;
+  std::size_t size() const { return settings.size() + 1; }
+  const SweepSetting& setting(std::size_t run) const { return run == 0 ? reference : settings[run - 1]; }
+};
+
+/// Whether run `run` is kept in plan.out for this plan (the same setting, frames and scene text).
+bool sweep_run_done(const SweepPlan& plan, std::size_t run);
+
+/// Simulates run `run` for plan.frames frames, with the independent penetration check on every
+/// frame, and keeps it in plan.out. Its result has no comparison yet (gather_sweep makes it).
+/// Returns nullopt when interrupt is set before the run ends (nothing kept). Throws
+/// std::runtime_error when the scene with the setting is invalid or the run cannot be kept.
+std::optional<SweepResult> run_sweep_run(const SweepPlan& plan, std::size_t run, const std::atomic<bool>& interrupt);
+
+/// The kept runs, the reference first, each compared with the reference and the Pareto front
+/// marked; runs not kept are missing. When the reference stopped early its result alone:
+/// there is nothing to compare the others with. Empty without the reference.
+std::vector<SweepResult> gather_sweep(const SweepPlan& plan);
 
 /// Marks the Pareto front of time against RMS error among the runs that did not fail and have
 /// no penetration (the reference is not a candidate).
