@@ -1,5 +1,6 @@
 // drape batch: a manifest's runs, each into its own folder, across MPI ranks when started by
 // mpirun or srun (core/batch.h, ranks.h).
+#include <algorithm>
 #include <atomic>
 #include <csignal>
 #include <cstdio>
@@ -54,6 +55,10 @@ int batch(const BatchArguments& args, const Ranks& ranks) {
         pending.push_back(i);
       }
     }
+    // The longest first: handed out in that order, the last runs to finish are short ones.
+    std::vector<double> cost(batch.runs.size(), 0);
+    for (const std::size_t i : pending) cost[i] = estimated_cost(batch.runs[i]);
+    std::stable_sort(pending.begin(), pending.end(), [&](std::size_t a, std::size_t b) { return cost[a] > cost[b]; });
     std::printf("drape batch %s: %zu runs, %zu complete already, %zu to run on %d %s; output in %s/\n",
                 manifest.string().c_str(), batch.runs.size(), skipped, pending.size(), ranks.size(),
                 ranks.size() == 1 ? "process" : "MPI ranks", out.string().c_str());

@@ -1,4 +1,5 @@
 // drape sweep: a scene over a grid of accuracy settings against a reference run (core/sweep.h).
+#include <algorithm>
 #include <atomic>
 #include <csignal>
 #include <cstdio>
@@ -87,6 +88,9 @@ int sweep(const SweepArguments& args, const Ranks& ranks) {
     }
     for (std::size_t i = 0; i < plan.size(); ++i)
       if (!sweep_run_done(plan, i)) pending.push_back(i);
+    // The longest first (the most steps a frame): the last runs to finish are short ones.
+    std::stable_sort(pending.begin(), pending.end(),
+                     [&](std::size_t a, std::size_t b) { return plan.setting(a).frame_steps > plan.setting(b).frame_steps; });
     std::printf("drape sweep %s: %zu settings and the reference (%s), %d frames each; %zu runs kept already, %zu to run on "
                 "%d %s\n",
                 args.scene.c_str(), plan.settings.size(), reference.label().c_str(), args.frames, plan.size() - pending.size(),

@@ -272,6 +272,16 @@ Batch load_batch(const fs::path& manifest, const fs::path& out) {
   return batch;
 }
 
+double estimated_cost(const BatchRun& run) {
+  try {
+    const Model model = build_model(load_with_overrides(run));
+    const int frames = run.frames > 0 ? run.frames : model.scene.frames;
+    return double(model.vertex_count()) * frames * model.scene.frame_steps;
+  } catch (const std::exception&) {
+    return 0;
+  }
+}
+
 std::optional<BatchResult> completed_batch_run(const Batch& batch, std::size_t index) {
   std::ifstream in(record_path(batch, index));
   if (!in) return std::nullopt;

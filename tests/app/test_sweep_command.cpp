@@ -24,6 +24,15 @@ TEST(SweepCommand, WritesTheTableAndThePlot) {
   char magic[4] = {};
   png.read(magic, 4);
   EXPECT_EQ(std::string(magic + 1, 3), "PNG");
+  // Started again: every run is kept, none runs, the table is the same but for times.
+  const Outcome again = run_drape("sweep " DRAPE_SOURCE_DIR "/scenes/hanging.json --frames 2 --steps 1,2 --solvers cholmod,cg:1e-4 "
+                                  "--methods vincent --no-plot --out " + out.string());
+  EXPECT_EQ(again.status, 0) << again.output;
+  EXPECT_NE(again.output.find("5 runs kept already, 0 to run"), std::string::npos) << again.output;
+  // More frames: a different sweep, all run again.
+  const Outcome longer = run_drape("sweep " DRAPE_SOURCE_DIR "/scenes/hanging.json --frames 3 --steps 1,2 --solvers cholmod,cg:1e-4 "
+                                   "--methods vincent --no-plot --out " + out.string());
+  EXPECT_NE(longer.output.find("0 runs kept already, 5 to run"), std::string::npos) << longer.output;
 }
 
 TEST(SweepCommand, BadFlagsNameTheFlag) {

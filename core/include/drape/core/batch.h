@@ -43,6 +43,10 @@ struct Batch {
 /// BatchError naming the file and the JSON path or CSV line.
 Batch load_batch(const std::filesystem::path& manifest, const std::filesystem::path& out);
 
+/// A run's expected cost, to hand out the longest first: vertices times frames times steps a
+/// frame (0 for a scene that cannot be read: it fails at once).
+double estimated_cost(const BatchRun& run);
+
 /// How a run ended, as drape run's exit status would say it.
 enum class BatchStatus { Ok = 0, BadInput = 2, Stopped = 3 };
 
