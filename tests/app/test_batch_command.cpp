@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <cstdlib>
 #include <chrono>
 #include <fstream>
 #include <sstream>
@@ -72,10 +73,16 @@ std::string column(const std::vector<std::string>& header, const std::vector<std
   return at == header.end() || std::size_t(at - header.begin()) >= row.size() ? "<none>" : row[at - header.begin()];
 }
 
-// mpirun with two ranks on this machine (as root too), or "" when Open MPI is missing.
+// mpirun with two ranks on this machine (as root too), or "" when Open MPI is missing. Under
+// the sanitizers, leak checking is off for the ranks: Open MPI keeps allocations past
+// MPI_Finalize in components it has unloaded, which LeakSanitizer can neither name nor
+// suppress (the other checks stay on, and the batch tests without MPI check leaks).
 std::string mpirun_two() {
   if (run_shell("command -v mpirun").status != 0) return "";
-  return "OMPI_MCA_btl_vader_single_copy_mechanism=none mpirun --allow-run-as-root --oversubscribe -np 2 ";
+  const char* asan = std::getenv("ASAN_OPTIONS");
+  // The last value of an option wins.
+  return "ASAN_OPTIONS='" + std::string(asan ? std::string(asan) + ":" : "") +
+         "detect_leaks=0' mpirun --allow-run-as-root --oversubscribe -np 2 ";
 }
 
 }  // namespace

@@ -203,14 +203,17 @@ TEST(Render, BadRenderSectionsNameThePathAndWhatWasExpected) {
       {R"({"resolution": [8192, 8192], "samples": 4})", "bad.json: /render/resolution: resolution times samples squared exceeds"},
       {R"({"fps": 0})", "bad.json: /render/fps: expected a frame rate from 0 to 240"},
   };
-  for (const Case& c : cases) {
-    const Scene scene = parse_scene(std::string(R"({"cloths": [{"grid": {}}], "render": )") + c.render + "}", "bad.json");
-    std::string message;
+  // The message of parse_render_settings on a scene's text, "" when it accepts it.
+  const auto render_error = [](const std::string& text) {
     try {
-      render::parse_render_settings(scene);
+      render::parse_render_settings(parse_scene(text, "bad.json"));
     } catch (const render::RenderError& e) {
-      message = e.what();
+      return std::string(e.what());
     }
+    return std::string();
+  };
+  for (const Case& c : cases) {
+    const std::string message = render_error(std::string(R"({"cloths": [{"grid": {}}], "render": )") + c.render + "}");
     EXPECT_NE(message.find(c.expected), std::string::npos) << "render: " << c.render << "\nmessage: " << message;
   }
   // A cloth's own render section.
@@ -223,13 +226,7 @@ TEST(Render, BadRenderSectionsNameThePathAndWhatWasExpected) {
       {R"({"colour": [0, 0, 0]})", "bad.json: /cloths/0/render/colour: unknown key (expected one of: color, back_color)"},
   };
   for (const Case& c : cloth_cases) {
-    const Scene scene = parse_scene(std::string(R"({"cloths": [{"grid": {}, "render": )") + c.render + "}]}", "bad.json");
-    std::string message;
-    try {
-      render::parse_render_settings(scene);
-    } catch (const render::RenderError& e) {
-      message = e.what();
-    }
+    const std::string message = render_error(std::string(R"({"cloths": [{"grid": {}, "render": )") + c.render + "}]}");
     EXPECT_NE(message.find(c.expected), std::string::npos) << "render: " << c.render << "\nmessage: " << message;
   }
   std::string not_object;
