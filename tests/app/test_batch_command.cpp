@@ -155,7 +155,8 @@ TEST(BatchCommand, StartedAgainItRunsOnlyWhatIsNotDone) {
   EXPECT_TRUE(fs::exists(out / "000_hanging" / "frame_00004.obj"));
 }
 
-// The whole job killed (SIGKILL, nothing cleaned up) once the first of six runs is recorded:
+// The whole job killed (SIGKILL, nothing cleaned up) once the first of six runs is recorded
+// (the longest, handed out first):
 // started again, it runs only the runs without a record.
 TEST(BatchCommand, AJobKilledMidwayCompletesOnlyTheRemainingRuns) {
   const fs::path dir = fresh_temp_path("batch", "killed"), out = dir / "out";
@@ -168,7 +169,7 @@ TEST(BatchCommand, AJobKilledMidwayCompletesOnlyTheRemainingRuns) {
   }
   const std::string command = std::string(DRAPE_EXECUTABLE) + " batch " + manifest.string() + " --out " + out.string();
   const Outcome killed = run_shell("(" + command + " > " + (dir / "log").string() + " 2>&1 & pid=$!; "
-                                   "while [ ! -e " + (out / "records" / "run_00000.json").string() + " ]; do sleep 0.05; done; "
+                                   "until ls " + (out / "records").string() + "/*.json >/dev/null 2>&1; do sleep 0.02; done; "
                                    "kill -9 $pid; wait $pid; echo killed)");
   ASSERT_NE(killed.output.find("killed"), std::string::npos) << killed.output;
   std::size_t recorded = 0;
