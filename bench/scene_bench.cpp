@@ -230,14 +230,15 @@ int main(int argc, char** argv) {
               model.scene.timestep(), model.scene.collisions.feature_boxes ? "on" : "off (paper's count)", separation_depth);
   std::printf("per measured frame: every detection round of each of its steps; one thread; median of %d passes, interleaved across the methods\n\n",
               passes);
-  std::printf("%5s %9s %10s %7s %7s %8s %9s %9s %9s %9s %9s %8s %8s %8s %8s %6s %5s %6s %8s %4s\n", "frame", "tri_pairs",
+  std::printf("%5s %9s %10s %7s %7s %8s %9s %9s %9s %9s %9s %8s %8s %8s %8s %6s %5s %6s %8s %9s %4s\n", "frame", "tri_pairs",
               "tests", "dnf%", "vin%", "vin%nc", "cubic_ms", "dnf_ms", "vin_ms", "cons_ms", "paper_ms", "vin/cub", "vin/dnf",
               "cons/vin", "pap/cub",
-              "hits", "diff", "c-miss", "step_ms", "pen");
+              "hits", "diff", "c-miss", "step_ms", "broad_ms", "pen");
   struct Measured {
     int frame;
     std::size_t tests, hits, culled_vincent;
     double ms[5];
+    double broad_ms;  // the simulation's broad phase over the frame (all its steps and rounds)
   };
   std::vector<Measured> measured;
   long disagreements = 0, beyond_conservative_total = 0, penetrations = 0;
@@ -247,8 +248,10 @@ int main(int argc, char** argv) {
     current.number = f;
     measuring = f % every == 0;
     const auto frame_begin = std::chrono::steady_clock::now();
+    double broad_ms = 0;
     for (int step = 0; step < model.scene.frame_steps; ++step) {
       const StepReport r = integrator.step(state);
+      broad_ms += r.collisions.broad_ms;
       if (!r.ok) {
         std::printf("stopped at frame %d: %s\n", f, r.failure.c_str());
         return 3;
@@ -294,14 +297,14 @@ int main(int argc, char** argv) {
     const std::size_t n = current.tests();
     const std::size_t culled = runs[VINCENT].counters.culled;
     const auto pct = [](double a, double b) { return b > 0 ? 100.0 * a / b : 0.0; };
-    std::printf("%5d %9ld %10zu %6.2f%% %6.2f%% %7.2f%% %9.2f %9.2f %9.2f %9.2f %9.2f %7.2fx %7.2fx %7.2fx %7.2fx %6zu %5ld %6ld %8.1f %4s\n",
+    std::printf("%5d %9ld %10zu %6.2f%% %6.2f%% %7.2f%% %9.2f %9.2f %9.2f %9.2f %9.2f %7.2fx %7.2fx %7.2fx %7.2fx %6zu %5ld %6ld %8.1f %9.1f %4s\n",
                 f, current.triangle_pairs, n, pct(double(runs[DNF].counters.culled), double(n)), pct(double(culled), double(n)),
                 pct(double(culled), double(n - hits)), runs[CUBIC].ms, runs[DNF].ms, runs[VINCENT].ms, runs[CONSERVATIVE].ms,
                 runs[PAPER].ms, runs[CUBIC].ms / runs[VINCENT].ms, runs[DNF].ms / runs[VINCENT].ms,
                 runs[CONSERVATIVE].ms / runs[VINCENT].ms, runs[CUBIC].ms / runs[PAPER].ms,
-                hits, diff, near, step_ms, check ? std::to_string(found).c_str() : "-");
+                hits, diff, near, step_ms, broad_ms, check ? std::to_string(found).c_str() : "-");
     std::fflush(stdout);
-    measured.push_back({f, n, hits, culled, {runs[0].ms, runs[1].ms, runs[2].ms, runs[3].ms, runs[PAPER].ms}});
+    measured.push_back({f, n, hits, culled, {runs[0].ms, runs[1].ms, runs[2].ms, runs[3].ms, runs[PAPER].ms}, broad_ms});
     if (!dump_dir.empty() && (dump_frame_number == f || (dump_frame_number == 0 && n > dump.tests()))) dump = std::move(current);
   }
   if (measured.empty()) {
@@ -314,19 +317,23 @@ int main(int argc, char** argv) {
   std::size_t most = 0;
   for (const auto& m : measured) most = std::max(most, m.tests);
   for (const bool heavy_only : {false, true}) {
-    double ms[5] = {0, 0, 0, 0, 0};
+    double ms[5] = {0, 0, 0, 0, 0}, broad = 0;
     std::size_t tests = 0, hits = 0, culled = 0, count = 0, least = SIZE_MAX;
     for (const auto& m : measured) {
       if (heavy_only && m.tests * 10 < most) continue;
       ++count;
       tests += m.tests, hits += m.hits, culled += m.culled_vincent, least = std::min(least, m.tests);
       for (int k = 0; k < 5; ++k) ms[k] += m.ms[k];
+      broad += m.broad_ms;
     }
     std::printf("\n%s (%zu frames, %zu to %zu tests a frame, %zu in all):\n",
                 heavy_only ? "heavy frames, at least a tenth of the most tests" : "all measured frames", count, least,
                 most, tests);
     std::printf("  narrow phase: cubic %.1f ms, dnf %.1f ms, vincent %.1f ms, conservative %.1f ms\n", ms[0], ms[1], ms[2],
                 ms[3]);
+    std::printf("  broad phase (the simulation's, every round and contact search of the frames' steps) %.1f ms: %.2fx vincent's "
+                "narrow phase\n",
+                broad, broad / ms[2]);
     std::printf("  vincent %.2fx faster than cubic, %.2fx than dnf; conservative costs %.2fx vincent\n", ms[0] / ms[2],
                 ms[1] / ms[2], ms[3] / ms[2]);
     std::printf("  the paper's filter alone (vincent, separation stage off) %.1f ms: %.2fx faster than cubic\n", ms[4],

@@ -26,6 +26,8 @@ void CollisionCounters::add(const CollisionCounters& o) {
   impact_zones += o.impact_zones;
   fail_safes += o.fail_safes;
   ccd_ms += o.ccd_ms;
+  broad_ms += o.broad_ms;
+  narrow_ms += o.narrow_ms;
   response_ms += o.response_ms;
 }
 
@@ -139,6 +141,7 @@ struct CollisionPipeline::Impl {
   // Candidate elementary tests for the motion start -> end, boxes grown by margin; the cloth
   // against itself too when self-collision is on and self is asked for.
   ccd::Candidates candidates(Scalar margin, CollisionCounters& counters, bool self = true) {
+    const auto begin = Clock::now();
     ccd::Candidates all;
     boxes.resize(cloth_triangles.size());
     for (std::size_t i = 0; i < cloth_triangles.size(); ++i) boxes[i] = ccd::swept_box(cloth_triangles[i], start, end, margin);
@@ -162,6 +165,7 @@ struct CollisionPipeline::Impl {
       counters.bvh_pairs += long(pairs.size());
       append(ccd::feature_pairs(cloth_triangles, mo.triangles, pairs, features));
     }
+    counters.broad_ms += ms_since(begin);
     return all;
   }
 
@@ -316,7 +320,9 @@ struct CollisionPipeline::Impl {
     ccd::Candidates c = candidates(model.scene.collisions.thickness, counters);
     const ccd::BatchInput input{start, end, c.vertex_face, c.edge_edge};
     if (observer) observer(input, counters.bvh_pairs - pairs_before);
+    const auto narrow_begin = Clock::now();
     const ccd::BatchOutput out = ccd::run_batch(input, options, settings.threads);
+    counters.narrow_ms += ms_since(narrow_begin);
     counters.tests += out.counters;
     counters.vf_tests += long(c.vertex_face.size());
     counters.ee_tests += long(c.edge_edge.size());

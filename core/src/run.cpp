@@ -20,7 +20,7 @@ namespace drape {
 std::string stats_header() {
   return "frame,sim_time,wall_ms,solve_ms,solver_iterations,kinetic_energy,potential_energy,max_stretch,"
          "min_distance_obstacle,obstacle_contacts,solver_warnings,bvh_pairs,vf_tests,ee_tests,culled,separated,root_solves,"
-         "ccd_hits,impulse_iterations,impact_zones,proximity_impulses,rest_clamped_pairs,fail_safes,ccd_ms,response_ms,penetrations,"
+         "ccd_hits,impulse_iterations,impact_zones,proximity_impulses,rest_clamped_pairs,fail_safes,ccd_ms,broad_ms,narrow_ms,response_ms,penetrations,"
          "external_work,energy_excess,step_halvings,warnings";
 }
 
@@ -32,14 +32,14 @@ std::string stats_row(const FrameStats& s) {
   if (s.penetrations) std::snprintf(penetrations, sizeof penetrations, "%d", *s.penetrations);
   const CollisionCounters& c = s.collisions;
   std::snprintf(buffer, sizeof buffer,
-                "%d,%.17g,%.3f,%.3f,%ld,%.17g,%.17g,%.17g,%s,%d,%d,%ld,%ld,%ld,%llu,%llu,%llu,%ld,%ld,%ld,%ld,%ld,%ld,%.3f,%.3f,%s,"
+                "%d,%.17g,%.3f,%.3f,%ld,%.17g,%.17g,%.17g,%s,%d,%d,%ld,%ld,%ld,%llu,%llu,%llu,%ld,%ld,%ld,%ld,%ld,%ld,%.3f,%.3f,%.3f,%.3f,%s,"
                 "%.17g,%.17g,%d,%d",
                 s.frame, s.sim_time, s.wall_ms, s.solve_ms, s.solver_iterations, s.kinetic_energy, s.potential_energy,
                 s.max_stretch, distance, s.obstacle_contacts, s.solver_warnings, c.bvh_pairs, c.vf_tests, c.ee_tests,
                 static_cast<unsigned long long>(c.tests.culled), static_cast<unsigned long long>(c.tests.separated),
                 static_cast<unsigned long long>(c.tests.root_solves),
                 c.ccd_hits, c.impulse_iterations, c.impact_zones, c.proximity_impulses, c.rest_clamped_pairs, c.fail_safes, c.ccd_ms,
-                c.response_ms, penetrations, s.external_work, s.energy_excess, s.step_halvings, s.warnings);
+                c.broad_ms, c.narrow_ms, c.response_ms, penetrations, s.external_work, s.energy_excess, s.step_halvings, s.warnings);
   return buffer;
 }
 

@@ -17,6 +17,8 @@ const std::map<std::string, ColumnTolerance>& stats_tolerances() {
       {"wall_ms", {0, 0, true}},
       {"solve_ms", {0, 0, true}},
       {"ccd_ms", {0, 0, true}},
+      {"broad_ms", {0, 0, true}},
+      {"narrow_ms", {0, 0, true}},
       {"response_ms", {0, 0, true}},
       {"solver_iterations", {2, 0.05}},
       {"kinetic_energy", {1e-9, 1e-6}},

@@ -46,7 +46,9 @@ struct CollisionCounters {
   long impulse_iterations = 0;  ///< CCD-impulse rounds that found collisions
   long impact_zones = 0;        ///< zones formed (counted each round)
   long fail_safes = 0;          ///< steps that needed the fail-safe
-  double ccd_ms = 0;            ///< broad and narrow phase
+  double ccd_ms = 0;            ///< detection rounds: broad and narrow phase, and the contacts built from the hits
+  double broad_ms = 0;          ///< the broad phase: swept boxes, the trees, and their pairs' features (all rounds and contact searches)
+  double narrow_ms = 0;         ///< the narrow phase: the elementary tests of the detection rounds
   double response_ms = 0;       ///< everything else
   void add(const CollisionCounters& other);
 };
