@@ -2,10 +2,20 @@
 
 #include <BulletCollision/BroadphaseCollision/btDbvt.h>
 
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+#include <tbb/parallel_sort.h>
+#include <tbb/task_arena.h>
+
 #include <algorithm>
 #include <cmath>
 
 namespace drape::ccd {
+
+namespace {
+// Triangle pairs (or triangles) a parallel task takes at once in feature_pairs.
+constexpr std::size_t PAIR_CHUNK = 4096;
+}  // namespace
 
 Aabb swept_box(const std::array<std::int32_t, 3>& triangle, std::span<const Vec3> start, std::span<const Vec3> end,
                Scalar margin) {
@@ -107,7 +117,7 @@ std::vector<std::pair<std::int32_t, std::int32_t>> BoxTree::pairs_with(const Box
 
 Candidates feature_pairs(std::span<const TriangleIndices> triangles_a, std::span<const TriangleIndices> triangles_b,
                          std::span<const std::pair<std::int32_t, std::int32_t>> pairs,
-                         std::span<const FeatureVolume> vertex_volumes) {
+                         std::span<const FeatureVolume> vertex_volumes, int threads) {
   Candidates out;
   const bool cull = !vertex_volumes.empty();
   const auto union_of = [&](std::span<const std::int32_t> vertices) {
@@ -120,51 +130,92 @@ Candidates feature_pairs(std::span<const TriangleIndices> triangles_a, std::span
     FeatureVolume face;
     std::array<FeatureVolume, 3> edge;  // edge i runs from corner i to corner i + 1
   };
+  // Runs body(begin, end) over [0, n) in chunks, in parallel when threads > 1.
+  const auto chunks = [&](std::size_t n, const auto& body) {
+    if (threads <= 1 || n < 2 * PAIR_CHUNK) return body(std::size_t(0), n);
+    tbb::task_arena arena(threads);
+    arena.execute([&] {
+      tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, PAIR_CHUNK), [&](const auto& r) { body(r.begin(), r.end()); });
+    });
+  };
   const auto volumes_of = [&](std::span<const TriangleIndices> triangles) {
     std::vector<TriangleVolumes> volumes(cull ? triangles.size() : 0);
-    for (std::size_t t = 0; t < volumes.size(); ++t) {
-      const TriangleIndices& tri = triangles[t];
-      volumes[t].face = union_of(tri);
-      for (int i = 0; i < 3; ++i) volumes[t].edge[i] = union_of(std::array<std::int32_t, 2>{tri[i], tri[(i + 1) % 3]});
-    }
+    chunks(volumes.size(), [&](std::size_t begin, std::size_t end) {
+      for (std::size_t t = begin; t < end; ++t) {
+        const TriangleIndices& tri = triangles[t];
+        volumes[t].face = union_of(tri);
+        for (int i = 0; i < 3; ++i) volumes[t].edge[i] = union_of(std::array<std::int32_t, 2>{tri[i], tri[(i + 1) % 3]});
+      }
+    });
     return volumes;
   };
   const std::vector<TriangleVolumes> volumes_a = volumes_of(triangles_a);
   const bool same_triangles = triangles_a.data() == triangles_b.data() && triangles_a.size() == triangles_b.size();
   const std::vector<TriangleVolumes> volumes_b = same_triangles ? std::vector<TriangleVolumes>{} : volumes_of(triangles_b);
   const std::vector<TriangleVolumes>& of_b = same_triangles ? volumes_a : volumes_b;
-  std::vector<std::array<std::int32_t, 4>> vf, ee;  // (vertex, face corners) and (edge, edge), canonical
-  vf.reserve(pairs.size() * 6);
-  ee.reserve(pairs.size() * 9);
+  using Key = std::array<std::int32_t, 4>;  // (vertex, face corners) and (edge, edge), canonical
   const auto shares = [](std::int32_t v, const TriangleIndices& t) { return v == t[0] || v == t[1] || v == t[2]; };
-  const auto add_vertex_face = [&](const TriangleIndices& from, const TriangleIndices& face, const FeatureVolume* face_volume) {
-    for (std::int32_t v : from)
-      if (!shares(v, face) && (!cull || overlap(vertex_volumes[v], *face_volume))) vf.push_back({v, face[0], face[1], face[2]});
-  };
-  for (const auto& [ia, ib] : pairs) {
-    const TriangleIndices& a = triangles_a[ia];
-    const TriangleIndices& b = triangles_b[ib];
-    const TriangleVolumes* va = cull ? &volumes_a[ia] : nullptr;
-    const TriangleVolumes* vb = cull ? &of_b[ib] : nullptr;
-    add_vertex_face(a, b, cull ? &vb->face : nullptr);
-    add_vertex_face(b, a, cull ? &va->face : nullptr);
-    for (int i = 0; i < 3; ++i) {
-      std::array<std::int32_t, 2> e{a[i], a[(i + 1) % 3]};
-      if (e[0] > e[1]) std::swap(e[0], e[1]);
-      for (int j = 0; j < 3; ++j) {
-        std::array<std::int32_t, 2> f{b[j], b[(j + 1) % 3]};
-        if (f[0] > f[1]) std::swap(f[0], f[1]);
-        if (e[0] == f[0] || e[0] == f[1] || e[1] == f[0] || e[1] == f[1]) continue;
-        if (cull && !overlap(va->edge[i], vb->edge[j])) continue;
-        // The same two edges can come from (a, b) or (b, a): order them.
-        if (f < e) ee.push_back({f[0], f[1], e[0], e[1]});
-        else ee.push_back({e[0], e[1], f[0], f[1]});
+  // The features of pairs [begin, end) into vf and ee.
+  const auto collect = [&](std::size_t begin, std::size_t end, std::vector<Key>& vf, std::vector<Key>& ee) {
+    vf.reserve((end - begin) * 6);
+    ee.reserve((end - begin) * 9);
+    const auto add_vertex_face = [&](const TriangleIndices& from, const TriangleIndices& face, const FeatureVolume* face_volume) {
+      for (std::int32_t v : from)
+        if (!shares(v, face) && (!cull || overlap(vertex_volumes[v], *face_volume))) vf.push_back({v, face[0], face[1], face[2]});
+    };
+    for (std::size_t p = begin; p < end; ++p) {
+      const auto& [ia, ib] = pairs[p];
+      const TriangleIndices& a = triangles_a[ia];
+      const TriangleIndices& b = triangles_b[ib];
+      const TriangleVolumes* va = cull ? &volumes_a[ia] : nullptr;
+      const TriangleVolumes* vb = cull ? &of_b[ib] : nullptr;
+      add_vertex_face(a, b, cull ? &vb->face : nullptr);
+      add_vertex_face(b, a, cull ? &va->face : nullptr);
+      for (int i = 0; i < 3; ++i) {
+        std::array<std::int32_t, 2> e{a[i], a[(i + 1) % 3]};
+        if (e[0] > e[1]) std::swap(e[0], e[1]);
+        for (int j = 0; j < 3; ++j) {
+          std::array<std::int32_t, 2> f{b[j], b[(j + 1) % 3]};
+          if (f[0] > f[1]) std::swap(f[0], f[1]);
+          if (e[0] == f[0] || e[0] == f[1] || e[1] == f[0] || e[1] == f[1]) continue;
+          if (cull && !overlap(va->edge[i], vb->edge[j])) continue;
+          // The same two edges can come from (a, b) or (b, a): order them.
+          if (f < e) ee.push_back({f[0], f[1], e[0], e[1]});
+          else ee.push_back({e[0], e[1], f[0], f[1]});
+        }
       }
     }
+  };
+  std::vector<Key> vf, ee;
+  if (threads <= 1 || pairs.size() < 2 * PAIR_CHUNK) {
+    collect(0, pairs.size(), vf, ee);
+  } else {
+    // Each chunk into its own lists, joined in chunk order: the sort below makes the order of
+    // the chunks irrelevant anyway.
+    const std::size_t count = (pairs.size() + PAIR_CHUNK - 1) / PAIR_CHUNK;
+    std::vector<std::vector<Key>> chunk_vf(count), chunk_ee(count);
+    tbb::task_arena arena(threads);
+    arena.execute([&] {
+      tbb::parallel_for(std::size_t(0), count, [&](std::size_t c) {
+        collect(c * PAIR_CHUNK, std::min(pairs.size(), (c + 1) * PAIR_CHUNK), chunk_vf[c], chunk_ee[c]);
+      });
+    });
+    for (std::size_t c = 0; c < count; ++c) {
+      vf.insert(vf.end(), chunk_vf[c].begin(), chunk_vf[c].end());
+      ee.insert(ee.end(), chunk_ee[c].begin(), chunk_ee[c].end());
+    }
   }
-  std::sort(vf.begin(), vf.end());
+  if (threads > 1) {
+    tbb::task_arena arena(threads);
+    arena.execute([&] {
+      tbb::parallel_sort(vf.begin(), vf.end());
+      tbb::parallel_sort(ee.begin(), ee.end());
+    });
+  } else {
+    std::sort(vf.begin(), vf.end());
+    std::sort(ee.begin(), ee.end());
+  }
   vf.erase(std::unique(vf.begin(), vf.end()), vf.end());
-  std::sort(ee.begin(), ee.end());
   ee.erase(std::unique(ee.begin(), ee.end()), ee.end());
   out.vertex_face.reserve(vf.size());
   for (const auto& k : vf) out.vertex_face.push_back({k[0], {k[1], k[2], k[3]}});

@@ -155,7 +155,7 @@ struct CollisionPipeline::Impl {
     if (self && model.scene.collisions.self) {
       const auto pairs = cloth_tree.self_pairs();
       counters.bvh_pairs += long(pairs.size());
-      append(ccd::feature_pairs(cloth_triangles, cloth_triangles, pairs, features));
+      append(ccd::feature_pairs(cloth_triangles, cloth_triangles, pairs, features, settings.threads));
     }
     for (MeshObstacle& mo : obstacles) {
       std::vector<ccd::Aabb> obstacle_boxes(mo.triangles.size());
@@ -163,7 +163,7 @@ struct CollisionPipeline::Impl {
       mo.tree.update(obstacle_boxes);
       const auto pairs = cloth_tree.pairs_with(mo.tree);
       counters.bvh_pairs += long(pairs.size());
-      append(ccd::feature_pairs(cloth_triangles, mo.triangles, pairs, features));
+      append(ccd::feature_pairs(cloth_triangles, mo.triangles, pairs, features, settings.threads));
     }
     counters.broad_ms += ms_since(begin);
     return all;

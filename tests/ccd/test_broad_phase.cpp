@@ -106,6 +106,25 @@ TEST(FeaturePairs, FeatureVolumesDropOnlyPairsThatStayApart) {
   const auto volumes = vertex_volumes(start, end, MARGIN);
   const Candidates all = feature_pairs(tris, tris, pairs);
   const Candidates kept = feature_pairs(tris, tris, pairs, volumes);
+  // In parallel chunks, the same lists in the same order. The pairs six times over: more than
+  // two chunks of them, and the same features found in different chunks.
+  std::vector<std::pair<std::int32_t, std::int32_t>> repeated;
+  for (int k = 0; k < 6; ++k) repeated.insert(repeated.end(), pairs.begin(), pairs.end());
+  ASSERT_GT(repeated.size(), 2u * 4096) << "too few pairs to split into chunks";
+  for (const int threads : {1, 2, 3}) {
+    const Candidates parallel_all = feature_pairs(tris, tris, repeated, {}, threads);
+    const Candidates parallel_kept = feature_pairs(tris, tris, repeated, volumes, threads);
+    ASSERT_EQ(parallel_all.vertex_face.size(), all.vertex_face.size());
+    ASSERT_EQ(parallel_kept.edge_edge.size(), kept.edge_edge.size());
+    for (std::size_t i = 0; i < all.vertex_face.size(); ++i) {
+      EXPECT_EQ(parallel_all.vertex_face[i].vertex, all.vertex_face[i].vertex);
+      EXPECT_EQ(parallel_all.vertex_face[i].face, all.vertex_face[i].face);
+    }
+    for (std::size_t i = 0; i < kept.edge_edge.size(); ++i) {
+      EXPECT_EQ(parallel_kept.edge_edge[i].edge_a, kept.edge_edge[i].edge_a);
+      EXPECT_EQ(parallel_kept.edge_edge[i].edge_b, kept.edge_edge[i].edge_b);
+    }
+  }
   // Apart, computed here independently: some direction among x, y, z and the six face
   // diagonals separates the two features' start and end points by more than twice the margin.
   const std::vector<Vec3> directions{Vec3(1, 0, 0), Vec3(0, 1, 0), Vec3(0, 0, 1),  Vec3(1, 1, 0), Vec3(1, -1, 0),

@@ -93,9 +93,10 @@ struct Candidates {
 using TriangleIndices = std::array<std::int32_t, 3>;
 
 /// pairs index triangles_a (first) and triangles_b (second); for self-collision pass the same
-/// span twice.
+/// span twice. threads: the pairs are split into chunks done in parallel (TBB); the result is
+/// sorted and the same for any thread count.
 Candidates feature_pairs(std::span<const TriangleIndices> triangles_a, std::span<const TriangleIndices> triangles_b,
                          std::span<const std::pair<std::int32_t, std::int32_t>> pairs,
-                         std::span<const FeatureVolume> vertex_volumes = {});
+                         std::span<const FeatureVolume> vertex_volumes = {}, int threads = 1);
 
 }  // namespace drape::ccd
