@@ -46,6 +46,10 @@ int batch(const BatchArguments& args, const Ranks& ranks) {
       std::cerr << "drape batch: " << out.string() << ": cannot create the output folder\n";
       return ranks.broadcast(EXIT_BAD_INPUT);
     }
+    if (const std::string why = lock_folder(out / "batch.lock"); !why.empty()) {
+      std::cerr << "drape batch: " << why << "\n";
+      return ranks.broadcast(EXIT_BAD_INPUT);
+    }
     std::size_t skipped = 0;
     for (std::size_t i = 0; i < batch.runs.size(); ++i) {
       if (completed_batch_run(batch, i)) {
@@ -86,7 +90,7 @@ int batch(const BatchArguments& args, const Ranks& ranks) {
     std::vector<BatchResult> results;
     std::size_t failed = 0;
     for (std::size_t i = 0; i < batch.runs.size(); ++i)
-      if (const auto r = completed_batch_run(batch, i)) {
+      if (const auto r = completed_batch_run(batch, i, true)) {
         results.push_back(*r);
         failed += r->status != BatchStatus::Ok;
       }
@@ -134,8 +138,9 @@ Command add_batch_command(CLI::App& app) {
       "into FOLDER.partial and renamed into place when it ends, then recorded in records/.\n"
       "batch.csv has a row per run: status (ok, bad_input, stopped), frames, wall time, message\n"
       "and the run's last stats.csv row.\n\n"
-      "Started again on the same output, the runs recorded already are skipped and the others\n"
-      "run from scratch. A run that fails is recorded and the others go on.\n\n"
+      "Started again on the same output, the runs recorded already (same scene and mesh bytes,\n"
+      "overrides, frames, folder) are skipped and the others run from scratch. A run that fails\n"
+      "is recorded and the others go on. A batch replaces only run folders it made itself.\n\n"
       "Exit status: 0 every run ok, 1 some failed, 2 a bad manifest, 3 interrupted.\n\n"
       "Examples:\n"
       "  drape batch runs.json\n"

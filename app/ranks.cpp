@@ -1,11 +1,17 @@
 // Ranks: MPI (Open MPI) when launched by mpirun or srun, a single process otherwise.
 #include "ranks.h"
 
+#include <fcntl.h>
 #include <mpi.h>
+#include <sys/file.h>
+#include <unistd.h>
 
 #include <atomic>
+#include <cerrno>
 #include <chrono>
+#include <cstdio>
 #include <cstdlib>
+#include <cstring>
 #include <stdexcept>
 #include <thread>
 
@@ -19,6 +25,17 @@ constexpr int ASK_MORE = 0, ASK_STOPPED = 1;
 // How often rank 0's serving thread looks for a request. A blocking receive in Open MPI spins
 // a core, which on a small machine would take it from the runs.
 constexpr auto SERVE_INTERVAL = std::chrono::milliseconds(5);
+
+// A task that throws counts as stopped (after saying why): a rank never leaves the hand-out
+// without telling rank 0, and rank 0's own thread never ends the process.
+bool guarded(const std::function<bool(std::size_t)>& task, std::size_t i, const std::string& prefix) {
+  try {
+    return task(i);
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "%sdrape: run %zu: %s; this rank takes no more runs\n", prefix.c_str(), i, e.what());
+    return false;
+  }
+}
 
 bool launched_by_mpi() {
   for (const char* name : {"OMPI_COMM_WORLD_SIZE", "PMIX_RANK", "PMI_RANK", "PMI_SIZE"})
@@ -54,7 +71,7 @@ std::string Ranks::prefix() const {
 void Ranks::run(const std::vector<std::size_t>& pending, const std::function<bool(std::size_t)>& task) const {
   if (!mpi_ || size_ == 1) {
     for (const std::size_t i : pending)
-      if (!task(i)) break;
+      if (!guarded(task, i, prefix())) break;
     return;
   }
   if (rank_ != 0) {
@@ -64,7 +81,7 @@ void Ranks::run(const std::vector<std::size_t>& pending, const std::function<boo
       long long index = -1;
       MPI_Recv(&index, 1, MPI_LONG_LONG, 0, TAG_GIVE, MPI_COMM_WORLD, MPI_STATUS_IGNORE);
       if (index < 0 || ask == ASK_STOPPED) break;
-      if (!task(std::size_t(index))) ask = ASK_STOPPED;
+      if (!guarded(task, std::size_t(index), prefix())) ask = ASK_STOPPED;
     }
     return;
   }
@@ -78,7 +95,7 @@ void Ranks::run(const std::vector<std::size_t>& pending, const std::function<boo
   };
   std::thread own([&] {
     for (long long i = take(); i >= 0; i = take())
-      if (!task(std::size_t(i))) {
+      if (!guarded(task, std::size_t(i), prefix())) {
         stopped.store(true);
         break;
       }
@@ -100,6 +117,20 @@ void Ranks::run(const std::vector<std::size_t>& pending, const std::function<boo
     if (index < 0) --working;
   }
   own.join();
+}
+
+std::string lock_folder(const std::filesystem::path& lock_file) {
+  const int fd = ::open(lock_file.c_str(), O_CREAT | O_RDWR | O_CLOEXEC, 0644);
+  if (fd < 0) return lock_file.string() + ": cannot open the lock file: " + std::strerror(errno);
+  if (::flock(fd, LOCK_EX | LOCK_NB) != 0) {
+    const int why = errno;
+    ::close(fd);
+    if (why == EWOULDBLOCK)
+      return lock_file.parent_path().string() + ": another drape batch or sweep is running on this folder (" +
+             lock_file.filename().string() + " is locked); wait for it, or give another --out";
+    return lock_file.string() + ": cannot lock: " + std::strerror(why);
+  }
+  return "";  // the descriptor stays open, and the lock held, until the process ends
 }
 
 int Ranks::broadcast(int value) const {

@@ -6,6 +6,7 @@
 /// on a thread of its own.
 
 #include <cstddef>
+#include <filesystem>
 #include <functional>
 #include <string>
 #include <vector>
@@ -40,5 +41,10 @@ class Ranks {
   int rank_ = 0, size_ = 1;
   bool mpi_ = false;
 };
+
+/// Takes an exclusive lock (flock) on the file, created if missing, for the rest of the
+/// process: two batches or sweeps on one output folder would remove each other's unfinished
+/// runs. Returns "" when locked, else why not. The lock goes with the process, killed or not.
+std::string lock_folder(const std::filesystem::path& lock_file);
 
 }  // namespace drape::app

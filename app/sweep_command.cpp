@@ -86,6 +86,16 @@ int sweep(const SweepArguments& args, const Ranks& ranks) {
       std::cerr << "drape sweep: " << plan.out.string() << ": cannot create the output folder\n";
       return ranks.broadcast(EXIT_BAD_INPUT);
     }
+    if (const std::string why = lock_folder(plan.out / "sweep.lock"); !why.empty()) {
+      std::cerr << "drape sweep: " << why << "\n";
+      return ranks.broadcast(EXIT_BAD_INPUT);
+    }
+    try {
+      check_sweep_plan(plan);
+    } catch (const SceneError& e) {
+      std::cerr << "drape sweep: " << e.what() << "\n";
+      return ranks.broadcast(EXIT_BAD_INPUT);
+    }
     for (std::size_t i = 0; i < plan.size(); ++i)
       if (!sweep_run_done(plan, i)) pending.push_back(i);
     // The longest first (the most steps a frame): the last runs to finish are short ones.
@@ -137,7 +147,7 @@ int sweep(const SweepArguments& args, const Ranks& ranks) {
   }
   if (results.size() < plan.size()) {
     std::cerr << "drape sweep: " << plan.size() - results.size()
-              << " runs not done (interrupted, or a setting the scene refuses); start the same command again to run only "
+              << " runs not done (interrupted, or a run that could not be kept); start the same command again to run only "
                  "those\n";
     ranks.broadcast(EXIT_RUN_STOPPED);
     return EXIT_RUN_STOPPED;

@@ -10,6 +10,7 @@
 #include <set>
 
 #include "drape/ccd/input_file.h"
+#include "drape/core/fingerprint.h"
 #include "drape/core/model.h"
 #include "drape/core/output_file.h"
 #include "drape/core/run.h"
@@ -160,21 +161,17 @@ std::vector<Entry> csv_entries(const fs::path& manifest, const std::string& text
   return entries;
 }
 
-// FNV-1a, 64 bits: tells a scene file changed since its run.
-std::string fingerprint(const std::string& bytes) {
-  std::uint64_t h = 1469598103934665603ull;
-  for (const unsigned char c : bytes) h = (h ^ c) * 1099511628211ull;
-  char text[17];
-  std::snprintf(text, sizeof text, "%016llx", static_cast<unsigned long long>(h));
-  return text;
+// A path without "." and ".." parts or a trailing separator.
+fs::path normal(const fs::path& path) {
+  fs::path p = path.lexically_normal();
+  if (p.filename().empty() && p.has_parent_path()) p = p.parent_path();
+  return p;
 }
 
-std::string scene_fingerprint(const fs::path& scene) {
-  try {
-    return fingerprint(ccd::read_input_file(scene, ccd::MAX_SCENE_BYTES, "scene file"));
-  } catch (const std::exception&) {
-    return "";  // unreadable: the run records a bad scene, and is redone when the file changes
-  }
+// Whether path lies strictly inside folder.
+bool inside(const fs::path& path, const fs::path& folder) {
+  const fs::path relative = path.lexically_relative(folder);
+  return !relative.empty() && *relative.begin() != ".." && relative != ".";
 }
 
 fs::path record_path(const Batch& batch, std::size_t index) {
@@ -183,10 +180,24 @@ fs::path record_path(const Batch& batch, std::size_t index) {
   return batch.out / "records" / name;
 }
 
-// What a record must match to count for this batch's run.
+fs::path pending_path(const Batch& batch, std::size_t index) {
+  fs::path path = record_path(batch, index);
+  return path.replace_extension(".pending");
+}
+
+Scene load_with_overrides(const BatchRun& run);
+
+// What a record must match to count for this batch's run: the scene file and the meshes it
+// names (their bytes), the overrides, frames and folder, and the stats columns of this build.
 json identity(const BatchRun& run) {
-  return {{"scene", run.scene.string()}, {"scene_fingerprint", scene_fingerprint(run.scene)}, {"overrides", run.overrides},
-          {"frames", run.frames}, {"out", run.out.string()}};
+  std::string inputs;
+  try {
+    inputs = scene_fingerprint(load_with_overrides(run));
+  } catch (const std::exception&) {
+    // A scene that cannot be read names no meshes; its own bytes are in the identity.
+  }
+  return {{"scene", run.scene.string()}, {"scene_fingerprint", file_fingerprint(run.scene)}, {"inputs", inputs},
+          {"overrides", run.overrides}, {"frames", run.frames}, {"out", run.out.string()}, {"stats_header", stats_header()}};
 }
 
 const char* status_name(BatchStatus s) {
@@ -209,20 +220,11 @@ std::string csv_quote(std::string text) {
 }
 
 Scene load_with_overrides(const BatchRun& run) {
-  if (run.overrides.empty()) return load_scene(run.scene);
-  std::string text;
-  try {
-    text = ccd::read_input_file(run.scene, ccd::MAX_SCENE_BYTES, "scene file");
-  } catch (const ccd::InputFileError& e) {
-    throw SceneError(e.what());
-  }
-  json scene;
-  try {
-    scene = json::parse(text);
-  } catch (const json::exception&) {
-    return parse_scene(text, run.scene);  // reports where the JSON breaks
-  }
-  if (!scene.is_object()) return parse_scene(text, run.scene);
+  // The scene must be valid by itself (its structure, keys and values, with the file's own
+  // lines in any message); the overrides then apply to it.
+  const Scene base = load_scene(run.scene);
+  if (run.overrides.empty()) return base;
+  json scene = json::parse(base.text);
   scene.merge_patch(json::parse(run.overrides));
   try {
     return parse_scene(scene.dump(2), run.scene);
@@ -244,7 +246,8 @@ Batch load_batch(const fs::path& manifest, const fs::path& out) {
       lower(manifest.extension().string()) == ".csv" ? csv_entries(manifest, text) : json_entries(manifest, text);
   Batch batch;
   batch.manifest = manifest;
-  batch.out = out;
+  batch.out = normal(out);
+  const fs::path root = batch.out;
   std::map<fs::path, std::size_t> folders;
   for (std::size_t i = 0; i < entries.size(); ++i) {
     const Entry& e = entries[i];
@@ -261,14 +264,22 @@ Batch load_batch(const fs::path& manifest, const fs::path& out) {
     char name[32];
     std::snprintf(name, sizeof name, "%03zu_", i);
     run.out = e.out.empty() ? out / (name + run.scene.stem().string()) : fs::path(e.out).is_absolute() ? fs::path(e.out) : out / e.out;
-    run.out = run.out.lexically_normal();
-    if (run.out.filename().empty()) run.out = run.out.parent_path();
+    run.out = normal(run.out);
+    if (run.out.extension() == ".partial")
+      fail(manifest, e.place, "out " + run.out.string() + " ends in .partial, drape's name for a run not finished; give another out");
+    if (run.out == root || run.out == root / "records" || run.out == root / "batch.csv" || inside(root, run.out))
+      fail(manifest, e.place, "out " + run.out.string() + " is or holds the batch's own folder " + root.string() +
+                                  "; give a folder inside it, or elsewhere");
     if (const auto [it, fresh] = folders.emplace(run.out, i); !fresh)
       fail(manifest, e.place, "writes to " + run.out.string() + " as run " + std::to_string(it->second) + " does; give another out");
-    if (run.out == out.lexically_normal() || run.out == (out / "records").lexically_normal())
-      fail(manifest, e.place, "out " + run.out.string() + " is the batch's own folder; give a folder inside it");
     batch.runs.push_back(run);
   }
+  // No run's folder inside another's: removing or renaming one would touch the other.
+  for (std::size_t i = 0; i < batch.runs.size(); ++i)
+    for (fs::path up = batch.runs[i].out.parent_path(); !up.empty() && up != up.parent_path(); up = up.parent_path())
+      if (const auto it = folders.find(up); it != folders.end())
+        fail(manifest, entries[i].place, "out " + batch.runs[i].out.string() + " is inside run " + std::to_string(it->second) +
+                                             "'s folder " + up.string() + "; give folders apart");
   return batch;
 }
 
@@ -282,13 +293,14 @@ double estimated_cost(const BatchRun& run) {
   }
 }
 
-std::optional<BatchResult> completed_batch_run(const Batch& batch, std::size_t index) {
+std::optional<BatchResult> completed_batch_run(const Batch& batch, std::size_t index, bool retryable_too) {
   std::ifstream in(record_path(batch, index));
   if (!in) return std::nullopt;
   json record;
   try {
     in >> record;
     if (record.at("identity") != identity(batch.runs[index])) return std::nullopt;
+    if (!record.at("final").get<bool>() && !retryable_too) return std::nullopt;
     BatchResult r;
     r.index = index;
     r.status = BatchStatus(record.at("exit_status").get<int>());
@@ -307,31 +319,47 @@ std::optional<BatchResult> completed_batch_run(const Batch& batch, std::size_t i
 std::optional<BatchResult> run_batch_run(const Batch& batch, std::size_t index, int threads, const std::atomic<bool>& interrupt) {
   const BatchRun& run = batch.runs[index];
   const json id = identity(run);
-  const fs::path record = record_path(batch, index);
+  const fs::path record = record_path(batch, index), pending = pending_path(batch, index);
   const fs::path partial = fs::path(run.out.string() + ".partial");
-  std::error_code error;
-  fs::remove(record, error);
   BatchResult result;
   result.index = index;
   const auto begin = std::chrono::steady_clock::now();
-  const auto finish = [&](BatchStatus status, const std::string& message) {
+  // The outcome, recorded. final: the same run would end the same way (a bad scene, a stop);
+  // not final: something outside the scene got in the way (the folder, the disk), and a
+  // batch started again runs it again.
+  const auto finish = [&](BatchStatus status, const std::string& message, bool final) {
     result.status = status;
     result.message = message;
     result.wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - begin).count();
-    const json r = {{"identity", id},          {"status", status_name(status)},      {"exit_status", int(status)},
-                    {"message", message},      {"frames", result.frames_done},       {"wall_s", result.wall_s},
-                    {"last_stats", result.last_stats}};
-    fs::create_directories(record.parent_path(), error);
-    write_file_atomically(record, r.dump(2) + "\n");
+    const json r = {{"identity", id},          {"status", status_name(status)}, {"exit_status", int(status)},
+                    {"message", message},      {"frames", result.frames_done},  {"wall_s", result.wall_s},
+                    {"last_stats", result.last_stats}, {"final", final}};
+    try {
+      write_file_atomically(record, r.dump(2) + "\n");
+      std::error_code ignored;
+      fs::remove(pending, ignored);
+    } catch (const std::exception& e) {
+      result.message += std::string(result.message.empty() ? "" : "; ") + "its record could not be written: " + e.what();
+    }
     return result;
   };
   try {
+    std::error_code error;
+    fs::create_directories(record.parent_path(), error);
+    // Whether this batch made the run's folders before: a record or a pending mark of it.
+    const bool ours = fs::exists(record) || fs::exists(pending);
+    fs::remove(record, error);
+    write_file_atomically(pending, run.out.string() + "\n");
     const Model model = build_model(load_with_overrides(run));
-    // An earlier folder of this run (its record lost) is replaced, but only when it holds
-    // nothing drape did not write.
-    if (fs::exists(run.out)) remove_run_folder(run.out);
-    fs::remove_all(partial, error);
-    if (error) throw RunSetupError(partial.string() + ": cannot remove the earlier partial run: " + error.message());
+    // An earlier folder of this run (its record lost when a job was killed) is replaced; one
+    // this batch did not make, or holding anything drape did not write, is left alone.
+    if (fs::exists(run.out)) {
+      if (!ours)
+        throw RunSetupError(run.out.string() + ": the folder exists and this batch did not make it; move it, or give the run "
+                                               "another out");
+      remove_run_folder(run.out);
+    }
+    if (fs::exists(partial)) remove_run_folder(partial);
     RunSettings settings;
     settings.out = partial;
     settings.frames = run.frames > 0 ? run.frames : model.scene.frames;
@@ -343,12 +371,14 @@ std::optional<BatchResult> run_batch_run(const Batch& batch, std::size_t index, 
     if (error) throw RunSetupError(run.out.string() + ": cannot move the finished run into place: " + error.message());
     result.frames_done = outcome.frames_done;
     result.last_stats = last_line(stats_path(run.out));
-    if (outcome.end == RunEnd::Stopped) return finish(BatchStatus::Stopped, outcome.message);
-    return finish(BatchStatus::Ok, "");
+    if (outcome.end == RunEnd::Stopped) return finish(BatchStatus::Stopped, outcome.message, true);
+    return finish(BatchStatus::Ok, "", true);
   } catch (const SceneError& e) {
-    return finish(BatchStatus::BadInput, e.what());
+    return finish(BatchStatus::BadInput, e.what(), true);
   } catch (const RunSetupError& e) {
-    return finish(BatchStatus::BadInput, e.what());
+    return finish(BatchStatus::BadInput, e.what(), false);
+  } catch (const std::exception& e) {  // a file system or output error
+    return finish(BatchStatus::Stopped, e.what(), false);
   }
 }
 

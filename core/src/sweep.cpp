@@ -15,6 +15,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "drape/core/fingerprint.h"
 #include "drape/core/integrator.h"
 #include "drape/core/output_file.h"
 #include "drape/core/penetration.h"
@@ -218,13 +219,17 @@ std::filesystem::path run_folder(const SweepPlan& plan, std::size_t run) {
   return plan.out / "runs" / name;
 }
 
-// What a kept run must match to count for this plan's run.
+// What a kept run must match to count for this plan's run: the setting to the last bit, the
+// frames, and the scene's text and meshes.
 nlohmann::json identity(const SweepPlan& plan, std::size_t run) {
-  // FNV-1a of the scene's text: a scene edited since is run again.
-  std::uint64_t h = 1469598103934665603ull;
-  for (const unsigned char c : plan.scene.text) h = (h ^ c) * 1099511628211ull;
-  return {{"setting", plan.setting(run).label()}, {"reference", run == 0}, {"frames", plan.frames},
-          {"scene", plan.scene.file.string()}, {"scene_text_hash", std::to_string(h)}};
+  const SweepSetting& s = plan.setting(run);
+  char exact[256];
+  std::snprintf(exact, sizeof exact, "%d %d %.17g %d %.17g %s %.17g %d %d", s.frame_steps, int(s.solver.kind),
+                double(s.solver.tolerance), s.solver.iterations, double(s.solver.chebyshev),
+                std::string(ccd::method_name(s.method)).c_str(), double(s.thickness), s.max_impulse_iterations,
+                s.max_zone_iterations);
+  return {{"setting", s.label()}, {"exact", exact}, {"reference", run == 0}, {"frames", plan.frames},
+          {"scene", plan.scene.file.string()}, {"inputs", scene_fingerprint(plan.scene)}};
 }
 
 std::optional<SweepResult> read_result(const SweepPlan& plan, std::size_t run) {
@@ -250,6 +255,10 @@ std::optional<SweepResult> read_result(const SweepPlan& plan, std::size_t run) {
 }
 
 }  // namespace
+
+void check_sweep_plan(const SweepPlan& plan) {
+  for (std::size_t run = 0; run < plan.size(); ++run) build_model(with_setting(plan.scene, plan.setting(run)));
+}
 
 bool sweep_run_done(const SweepPlan& plan, std::size_t run) {
   return read_result(plan, run) && std::filesystem::exists(run_folder(plan, run) / "trajectory.bin");
@@ -293,7 +302,10 @@ std::vector<SweepResult> gather_sweep(const SweepPlan& plan) {
     std::optional<SweepResult> r = read_result(plan, run);
     if (!r) continue;
     const std::optional<Trajectory> trajectory = read_trajectory(run_folder(plan, run) / "trajectory.bin");
-    if (!trajectory) continue;
+    // Kept with another mesh (fingerprints collide, or the file was replaced): not comparable.
+    if (!trajectory || trajectory->positions.empty() ||
+        trajectory->positions[0].size() != reference_trajectory->positions[0].size())
+      continue;
     compare(*r, *trajectory, *reference_trajectory);
     results.push_back(*r);
   }

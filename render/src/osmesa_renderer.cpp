@@ -373,6 +373,17 @@ class OsmesaRenderer final : public Renderer {
       cloths_[c].draw();
     }
     glDisable(GL_LIGHTING);
+    if (look.wireframe) {
+      // The edges as dark lines over the lit faces, pulled towards the camera.
+      glPolygonMode(GL_FRONT_AND_BACK, GL_LINE);
+      glEnable(GL_POLYGON_OFFSET_LINE);
+      glPolygonOffset(-1.0f, -1.0f);
+      glLineWidth(float(samples_));  // a pixel wide once filtered down
+      glColor3f(0.15f, 0.1f, 0.1f);
+      for (const Triangles& cloth : cloths_) cloth.draw();
+      glDisable(GL_POLYGON_OFFSET_LINE);
+      glPolygonMode(GL_FRONT_AND_BACK, GL_FILL);
+    }
   }
 
   void render_shaded(const Model& model, Scalar t, const Look& look, const Camera& camera, const Vec3& view, const Vec3& side,

@@ -174,8 +174,7 @@ Camera frame_scene(const Model& model, Scalar aspect) {
     for (const Vec3& p : o.mesh.vertices) include(p);
   }
   Camera c;
-  c.up = -model.scene.gravity.norm() > 0 ? Vec3(-model.scene.gravity.normalized()) : Vec3::UnitZ();
-  if (!(c.up.norm() > 0)) c.up = Vec3::UnitZ();
+  c.up = model.scene.gravity.norm() > 0 ? Vec3(-model.scene.gravity.normalized()) : Vec3::UnitZ();
   c.target = 0.5 * (lo + hi);
   const Scalar radius = std::max<Scalar>(0.5 * (hi - lo).norm(), 1e-3);
   const Scalar half_fov = c.fov_degrees * M_PI / 360.0;

@@ -81,7 +81,7 @@ std::string mpirun_two() {
   if (run_shell("command -v mpirun").status != 0) return "";
   const char* asan = std::getenv("ASAN_OPTIONS");
   // The last value of an option wins.
-  return "ASAN_OPTIONS='" + std::string(asan ? std::string(asan) + ":" : "") +
+  return "env ASAN_OPTIONS='" + std::string(asan ? std::string(asan) + ":" : "") +
          "detect_leaks=0' mpirun --allow-run-as-root --oversubscribe -np 2 ";
 }
 
@@ -189,6 +189,69 @@ TEST(BatchCommand, AJobKilledMidwayCompletesOnlyTheRemainingRuns) {
     EXPECT_EQ(entry.path().string().find(".partial"), std::string::npos) << entry.path();
 }
 
+// A batch replaces only folders it made: a folder of a drape run, or one holding other files,
+// is left alone and the run is bad input, done again once the folder is moved (not a final
+// outcome). A base scene invalid by itself is refused with its own file's message even with
+// overrides. A changed mesh is a different run.
+TEST(BatchCommand, ItReplacesOnlyFoldersItMadeAndRerunsWhenInputsChange) {
+  const fs::path dir = fresh_temp_path("batch", "folders"), out = dir / "out";
+  fs::create_directories(dir);
+  ASSERT_EQ(run_drape("run " + HANGING + " --frames 3 --quiet --out " + (dir / "mine").string()).status, 0);
+  fs::copy_file(DRAPE_SOURCE_DIR "/scenes/mesh_obstacle.json", dir / "box_scene.json");
+  fs::create_directories(dir / "meshes");
+  fs::copy_file(DRAPE_SOURCE_DIR "/scenes/meshes/box.obj", dir / "meshes" / "box.obj");
+  std::ofstream(dir / "twice.json") << R"({"frames": 2, "frames": 3, "cloths": [{"grid": {}}]})";
+  std::ofstream(dir / "runs.json") << R"([{"scene": ")" + HANGING + R"(", "frames": 1, "out": ")" + (dir / "mine").string() + R"("},
+      {"scene": "twice.json", "overrides": {"frame_steps": 2}},
+      {"scene": "box_scene.json", "frames": 1}])";
+  const std::string command = "batch " + (dir / "runs.json").string() + " --out " + out.string();
+  const Outcome first = run_drape(command);
+  EXPECT_EQ(first.status, 1) << first.output;
+  const std::vector<std::string> rows = lines(out / "batch.csv");
+  ASSERT_EQ(rows.size(), 4u) << first.output;
+  EXPECT_NE(rows[1].find("the folder exists and this batch did not make it"), std::string::npos) << rows[1];
+  EXPECT_TRUE(fs::exists(dir / "mine" / "frame_00003.obj"));  // the user's run untouched
+  EXPECT_NE(rows[2].find("twice.json: line 1, column 15"), std::string::npos) << rows[2];
+  EXPECT_NE(rows[2].find("appears twice"), std::string::npos) << rows[2];
+  EXPECT_EQ(split(rows[3])[3], "ok") << rows[3];
+  // The folder moved away: run 0 runs; the bad scene stays recorded; the box run is done.
+  fs::rename(dir / "mine", dir / "moved");
+  const Outcome second = run_drape(command);
+  EXPECT_NE(second.output.find("3 runs, 2 complete already, 1 to run"), std::string::npos) << second.output;
+  EXPECT_EQ(split(lines(out / "batch.csv")[1])[3], "ok");
+  // The box mesh edited: its run is done again.
+  std::ofstream(dir / "meshes" / "box.obj", std::ios::app) << "# edited\n";
+  const Outcome third = run_drape(command);
+  EXPECT_NE(third.output.find("3 runs, 2 complete already, 1 to run"), std::string::npos) << third.output;
+  EXPECT_NE(third.output.find("run 2 (box_scene.json): ok"), std::string::npos) << third.output;
+}
+
+// Two batches on one folder: the second is refused while the first holds the lock.
+TEST(BatchCommand, ASecondBatchOnTheSameFolderIsRefused) {
+  const fs::path dir = fresh_temp_path("batch", "locked"), out = dir / "out";
+  const fs::path manifest = write_manifest(dir);
+  fs::create_directories(out);
+  const Outcome locked = run_shell("flock " + (out / "batch.lock").string() + " " + DRAPE_EXECUTABLE + " batch " +
+                                   manifest.string() + " --out " + out.string());
+  EXPECT_EQ(locked.status, 2) << locked.output;
+  EXPECT_NE(locked.output.find("another drape batch or sweep is running on this folder"), std::string::npos) << locked.output;
+}
+
+// Records that cannot be written (records/ is a file): no crash, no hang, the runs reported
+// as not done, on one process and on two ranks.
+TEST(BatchCommand, AnUnwritableRecordFolderEndsTheBatchCleanly) {
+  const fs::path dir = fresh_temp_path("batch", "unwritable");
+  const fs::path manifest = write_manifest(dir);
+  for (const std::string& launcher : {std::string(), mpirun_two()}) {
+    const fs::path out = dir / (launcher.empty() ? "serial" : "mpi");
+    fs::create_directories(out);
+    std::ofstream(out / "records") << "in the way";
+    const Outcome run = run_shell("timeout 120 " + launcher + DRAPE_EXECUTABLE + " batch " + manifest.string() + " --out " + out.string());
+    EXPECT_EQ(run.status, 3) << launcher << run.output;
+    EXPECT_NE(run.output.find("runs not done"), std::string::npos) << run.output;
+  }
+}
+
 TEST(BatchCommand, ACsvManifestIsTheSameAsItsJson) {
   const fs::path dir = fresh_temp_path("batch", "csv");
   const fs::path json_out = dir / "json_out", csv_out = dir / "csv_out";
@@ -226,10 +289,15 @@ TEST(BatchCommand, BadManifestsNameTheFileThePlaceAndWhatWasExpected) {
       {"l.csv", "scene,frames\nx.json,three\n", "l.csv: line 2: column frames: expected an integer from 1 to 1000000"},
       {"m.csv", "frames\n3\n", "m.csv: line 1: the header has no 'scene' column"},
       {"n.csv", "scene,overrides\nx.json,{\"\"a\n", "n.csv: line 2: column overrides: expected a JSON object"},
+      {"o.json", R"([{"scene": "x.json", "out": "a"}, {"scene": "y.json", "out": "a/b"}])", "o.json: /1: out"},
+      {"p.json", R"([{"scene": "x.json", "out": "a.partial"}])", "p.json: /0: out"},
+      {"q.json", R"([{"scene": "x.json", "out": "records"}])", "is or holds the batch's own folder"},
+      {"r.json", R"([{"scene": "x.json", "out": ".."}])", "is or holds the batch's own folder"},
+      {"s.json", R"([{"scene": "x.json", "out": "."}])", "is or holds the batch's own folder"},
   };
   for (const auto& c : cases) {
     std::ofstream(dir / c.name) << c.text;
-    const Outcome run = run_drape("batch " + (dir / c.name).string() + " --out " + (dir / "out").string());
+    const Outcome run = run_drape("batch " + (dir / c.name).string() + " --out " + (dir / "out").string() + "/");
     EXPECT_EQ(run.status, 2) << c.name << "\n" << run.output;
     EXPECT_NE(run.output.find(c.expected), std::string::npos) << c.name << "\n" << run.output;
   }

@@ -402,9 +402,20 @@ TEST(Render, TheWireframeDrawsTheTriangleEdges) {
     for (std::size_t p = 0; p < image.rgb.size(); p += 3) n += image.rgb[p] < 110 && image.rgb[p] > image.rgb[p + 2];
     return n;
   };
-  const int without = dark(renderer->render(model, model.initial_positions, 0, camera, plain));
-  const int with = dark(renderer->render(model, model.initial_positions, 0, camera, wire));
-  EXPECT_GT(with, without + 2000) << without << " dark red pixels without the wireframe, " << with << " with";
+  for (const auto style : {render::Look::Style::Shaded, render::Look::Style::Simple}) {
+    plain.style = wire.style = style;
+    const int without = dark(renderer->render(model, model.initial_positions, 0, camera, plain));
+    const int with = dark(renderer->render(model, model.initial_positions, 0, camera, wire));
+    EXPECT_GT(with, without + 2000) << without << " dark red pixels without the wireframe, " << with << " with";
+  }
+}
+
+// The camera framed automatically has "up" against gravity.
+TEST(Render, TheAutomaticCameraIsUprightAgainstGravity) {
+  const Model sideways = scene_model(R"({"gravity": [0, -9.81, 0], "cloths": [{"grid": {}}]})");
+  EXPECT_TRUE(render::frame_scene(sideways, 16.0 / 9).up.isApprox(Vec3::UnitY())) << render::frame_scene(sideways, 16.0 / 9).up;
+  const Model weightless = scene_model(R"({"gravity": [0, 0, 0], "cloths": [{"grid": {}}]})");
+  EXPECT_TRUE(render::frame_scene(weightless, 16.0 / 9).up.isApprox(Vec3::UnitZ()));
 }
 
 // drape render's frame range, still and camera options, and its errors.

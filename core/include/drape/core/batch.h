@@ -59,12 +59,16 @@ struct BatchResult {
   std::string last_stats;   ///< the last row of its stats.csv ("" when none)
 };
 
-/// The record of run index when it is complete for this batch (the same scene file and text,
-/// overrides, frames and folder), else nullopt: the run has to be done (again).
-std::optional<BatchResult> completed_batch_run(const Batch& batch, std::size_t index);
+/// The record of run index when it is complete for this batch (the same scene file's and
+/// meshes' bytes, overrides, frames, folder and stats columns), else nullopt: the run has to be
+/// done (again). A run that failed for a reason outside its scene (its folder, the disk) is
+/// complete only with retryable_too (for the table of the batch that ran it).
+std::optional<BatchResult> completed_batch_run(const Batch& batch, std::size_t index, bool retryable_too = false);
 
 /// Runs run index into its folder: into FOLDER.partial (an earlier one removed), renamed into
-/// place when it ends, then its record written. A bad scene or a run that stops is a result,
+/// place when it ends, then its record written. A folder already at FOLDER is replaced only
+/// when this batch made it (a record or a pending mark of the run) and it holds nothing drape
+/// did not write. A bad scene, a run that stops, or a folder or disk in the way is a result,
 /// not an exception. Returns nullopt when interrupted: nothing recorded, the partial folder
 /// left for the next start to remove. threads: the narrow phase's threads.
 std::optional<BatchResult> run_batch_run(const Batch& batch, std::size_t index, int threads,

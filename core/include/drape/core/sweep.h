@@ -74,6 +74,10 @@ struct SweepPlan {
   const SweepSetting& setting(std::size_t run) const { return run == 0 ? reference : settings[run - 1]; }
 };
 
+/// Throws SceneError when the scene with one of the plan's settings is invalid (a thickness
+/// too large for its cloth, say), before anything runs.
+void check_sweep_plan(const SweepPlan& plan);
+
 /// Whether run `run` is kept in plan.out for this plan (the same setting, frames and scene text).
 bool sweep_run_done(const SweepPlan& plan, std::size_t run);
 
