@@ -44,6 +44,7 @@ Command add_check_command(CLI::App& app);
 Command add_render_command(CLI::App& app);
 Command add_sweep_command(CLI::App& app);
 Command add_batch_command(CLI::App& app);
+Command add_measure_command(CLI::App& app);
 
 /// Options of a render, from drape render or drape run --render.
 struct RenderOptions {

@@ -23,7 +23,8 @@ int main(int argc, char** argv) {
       "  drape check-stats out/flag/stats.csv golden.csv compare frame statistics\n"
       "  drape ccd tests/data/ccd-queries               compare the CCD methods on ground truth\n"
       "  drape sweep scenes/cloth_fold.json             time against accuracy over a grid of settings\n"
-      "  drape batch runs.json                          a list of scene runs (mpirun -np 4 drape batch ...)");
+      "  drape batch runs.json                          a list of scene runs (mpirun -np 4 drape batch ...)\n"
+      "  drape measure cusick out/cusick_drape          the Cusick drape coefficient and folds of a run");
 
   std::map<std::string, drape::app::Command> commands;
   commands["run"] = drape::app::add_run_command(app);
@@ -34,6 +35,7 @@ int main(int argc, char** argv) {
   commands["ccd"] = drape::app::add_ccd_command(app);
   commands["sweep"] = drape::app::add_sweep_command(app);
   commands["batch"] = drape::app::add_batch_command(app);
+  commands["measure"] = drape::app::add_measure_command(app);
 
   try {
     app.parse(argc, argv);
