@@ -40,13 +40,7 @@ int batch(const BatchArguments& args, const Ranks& ranks) {
   }
   std::vector<std::size_t> pending;
   if (ranks.rank() == 0) {
-    std::error_code error;
-    std::filesystem::create_directories(out, error);
-    if (error || !std::filesystem::is_directory(out)) {
-      std::cerr << "drape batch: " << out.string() << ": cannot create the output folder\n";
-      return ranks.broadcast(EXIT_BAD_INPUT);
-    }
-    if (const std::string why = lock_folder(out / "batch.lock"); !why.empty()) {
+    if (const std::string why = claim_output_folder(out, "batch.lock"); !why.empty()) {
       std::cerr << "drape batch: " << why << "\n";
       return ranks.broadcast(EXIT_BAD_INPUT);
     }

@@ -119,7 +119,12 @@ void Ranks::run(const std::vector<std::size_t>& pending, const std::function<boo
   own.join();
 }
 
-std::string lock_folder(const std::filesystem::path& lock_file) {
+std::string claim_output_folder(const std::filesystem::path& folder, const std::string& lock_name) {
+  std::error_code error;
+  std::filesystem::create_directories(folder, error);
+  if (error || !std::filesystem::is_directory(folder))
+    return folder.string() + ": cannot create the output folder" + (error ? ": " + error.message() : "");
+  const std::filesystem::path lock_file = folder / lock_name;
   const int fd = ::open(lock_file.c_str(), O_CREAT | O_RDWR | O_CLOEXEC, 0644);
   if (fd < 0) return lock_file.string() + ": cannot open the lock file: " + std::strerror(errno);
   if (::flock(fd, LOCK_EX | LOCK_NB) != 0) {

@@ -42,9 +42,10 @@ class Ranks {
   bool mpi_ = false;
 };
 
-/// Takes an exclusive lock (flock) on the file, created if missing, for the rest of the
-/// process: two batches or sweeps on one output folder would remove each other's unfinished
-/// runs. Returns "" when locked, else why not. The lock goes with the process, killed or not.
-std::string lock_folder(const std::filesystem::path& lock_file);
+/// Creates the output folder of a batch or sweep and takes an exclusive lock (flock) on its
+/// lock file for the rest of the process: two of them on one folder would remove each other's
+/// unfinished runs. Returns "" when done, else why not. The lock goes with the process, killed
+/// or not.
+std::string claim_output_folder(const std::filesystem::path& folder, const std::string& lock_name);
 
 }  // namespace drape::app

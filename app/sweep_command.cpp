@@ -80,13 +80,7 @@ int sweep(const SweepArguments& args, const Ranks& ranks) {
   plan.out = args.out.empty() ? std::filesystem::path("out") / (name + "_sweep") : std::filesystem::path(args.out);
   std::vector<std::size_t> pending;
   if (ranks.rank() == 0) {
-    std::error_code error;
-    std::filesystem::create_directories(plan.out, error);
-    if (error || !std::filesystem::is_directory(plan.out)) {
-      std::cerr << "drape sweep: " << plan.out.string() << ": cannot create the output folder\n";
-      return ranks.broadcast(EXIT_BAD_INPUT);
-    }
-    if (const std::string why = lock_folder(plan.out / "sweep.lock"); !why.empty()) {
+    if (const std::string why = claim_output_folder(plan.out, "sweep.lock"); !why.empty()) {
       std::cerr << "drape sweep: " << why << "\n";
       return ranks.broadcast(EXIT_BAD_INPUT);
     }

@@ -7,7 +7,6 @@
 #include <cstdio>
 #include <fstream>
 #include <map>
-#include <set>
 
 #include "drape/ccd/input_file.h"
 #include "drape/core/fingerprint.h"

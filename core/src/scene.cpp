@@ -203,6 +203,12 @@ Box read_box(const Node& n) {
   return b;
 }
 
+// A render section (the scene's or a cloth's), kept as text: the renderer reads it.
+std::string render_section(const Node& r) {
+  if (!r.raw().is_object()) r.fail("expected an object");
+  return r.raw().dump();
+}
+
 ClothSpec read_cloth(const Node& n) {
   n.allow({"mesh", "grid", "transform", "material", "velocity", "render"});
   ClothSpec c;
@@ -231,11 +237,7 @@ ClothSpec read_cloth(const Node& n) {
   }
   if (n.has("transform")) c.transform = read_transform(n.at("transform"));
   if (n.has("velocity")) c.velocity = n.at("velocity").vec3_within(MAX_SPEED, "m/s");
-  if (n.has("render")) {
-    const Node r = n.at("render");
-    if (!r.raw().is_object()) r.fail("expected an object");
-    c.render_json = r.raw().dump();
-  }
+  if (n.has("render")) c.render_json = render_section(n.at("render"));
   if (n.has("material")) {
     const Node m = n.at("material");
     m.allow({"density", "stretch", "shear", "bend", "damping", "air_damping"});
@@ -455,11 +457,7 @@ Scene parse_scene(const std::string& text, const std::filesystem::path& file) {
     if (!(limits.energy_stop >= limits.energy_warn)) l.fail("expected energy_stop >= energy_warn");
     if (!(limits.stretch_stop >= limits.stretch_warn)) l.fail("expected stretch_stop >= stretch_warn");
   }
-  if (n.has("render")) {
-    const Node r = n.at("render");
-    if (!r.raw().is_object()) r.fail("expected an object");
-    s.render_json = r.raw().dump();
-  }
+  if (n.has("render")) s.render_json = render_section(n.at("render"));
   return s;
 }
 

@@ -237,18 +237,24 @@ void main() {
 }
 )";
 
+// Throws RenderError with OpenGL's log when a shader or program's status is false:
+// get_status and get_log are glGetShaderiv and glGetShaderInfoLog, or the Program pair.
+void require(GLuint object, GLenum status, void (*get_status)(GLuint, GLenum, GLint*),
+             void (*get_log)(GLuint, GLsizei, GLsizei*, GLchar*), const char* what) {
+  GLint ok = 0;
+  get_status(object, status, &ok);
+  if (ok) return;
+  char log[2048] = {};
+  get_log(object, sizeof log, nullptr, log);
+  throw RenderError(std::string(what) + log);
+}
+
 GLuint compile(GLenum kind, const std::string& source) {
   const GLuint shader = glCreateShader(kind);
   const char* text = source.c_str();
   glShaderSource(shader, 1, &text, nullptr);
   glCompileShader(shader);
-  GLint ok = 0;
-  glGetShaderiv(shader, GL_COMPILE_STATUS, &ok);
-  if (!ok) {
-    char log[2048] = {};
-    glGetShaderInfoLog(shader, sizeof log, nullptr, log);
-    throw RenderError(std::string("a shader failed to compile: ") + log);
-  }
+  require(shader, GL_COMPILE_STATUS, glGetShaderiv, glGetShaderInfoLog, "a shader failed to compile: ");
   return shader;
 }
 
@@ -257,13 +263,7 @@ GLuint link(const char* vertex, const std::string& fragment) {
   glAttachShader(program, compile(GL_VERTEX_SHADER, vertex));
   glAttachShader(program, compile(GL_FRAGMENT_SHADER, "#version 130\n" + std::string(LIGHTING) + fragment));
   glLinkProgram(program);
-  GLint ok = 0;
-  glGetProgramiv(program, GL_LINK_STATUS, &ok);
-  if (!ok) {
-    char log[2048] = {};
-    glGetProgramInfoLog(program, sizeof log, nullptr, log);
-    throw RenderError(std::string("a shader program failed to link: ") + log);
-  }
+  require(program, GL_LINK_STATUS, glGetProgramiv, glGetProgramInfoLog, "a shader program failed to link: ");
   return program;
 }
 
