@@ -182,7 +182,7 @@ Command add_sweep_command(CLI::App& app) {
   cmd->add_option("--steps", args->steps, "Steps per frame to try (default: half, once and twice the scene's)")
       ->delimiter(',')
       ->check(CLI::Range(1, 10000));
-  cmd->add_option("--solvers", args->solvers, "Solvers to try: cholmod, cg or cg:TOLERANCE, projective or projective:ITERATIONS[:CHEBYSHEV] (docs/sweep.md)")
+  cmd->add_option("--solvers", args->solvers, "Solvers to try: cholmod, cg or cg:TOLERANCE, projective or projective:NAME=VALUE[:NAME=VALUE...] with iterations, history, tolerance, chebyshev (docs/sweep.md)")
       ->delimiter(',')
       ->capture_default_str();
   cmd->add_option("--methods", args->methods, "CCD methods to try")

@@ -34,6 +34,10 @@ constexpr Scalar NEGLIGIBLE_MOTION = 1e-2;
 // m/s: a contact vertex slipping slower than this across its obstacle sticks (the friction in
 // Integrator::solve_linearised).
 constexpr Scalar FRICTION_SLIP = 1e-4;
+// The projective solve keeps the cloth this many thicknesses from spheres and planes: a held
+// contact yields a little (its penalty's force needs a depth), and within this margin it
+// yields outside the thickness, where the response after the solve has nothing to do.
+constexpr Scalar HELD_GAP = 1.05;
 
 // A step may end with at most this fraction of the scene's energy scale (energy_scale) more
 // than it started with, plus the sources' work; beyond it the step is taken again in 2, 4, ...
@@ -55,6 +59,7 @@ struct Integrator::Workspace {
   // The projective step's start velocities and explicit forces (gravity, wind), kept for the
   // response's spread.
   std::vector<Vec3> start_velocities, explicit_forces;
+  ProjectiveContacts projective_contacts;  // what the projective step holds in its solve
   // The contacts the linearised solve keeps, and the impulse (N s, along the normal) each
   // applied; zero for the ones released.
   std::vector<SolveContact> contacts;
@@ -136,6 +141,7 @@ Integrator::Integrator(const Model& model, int threads) : model_(model), work_(s
 }
 
 int Integrator::analyses() const { return projective_ ? projective_->analyses() : solver_->analyses(); }
+int Integrator::factorisations() const { return projective_ ? 0 : solver_->factorisations(); }
 
 Scalar energy_scale(const Model& model) {
   const Box extent = initial_extent(model);
@@ -205,6 +211,18 @@ int respond_to_analytic_obstacles(const Model& model, const std::vector<Vec3>& s
   return contacts;
 }
 
+// Each vertex's contact of largest weight among contacts (-1: none), for its friction.
+std::vector<int> strongest_contacts(const std::vector<SolveContact>& contacts, int n) {
+  std::vector<int> strongest(std::size_t(n), -1);
+  std::vector<Scalar> weight(std::size_t(n), 0);
+  for (std::size_t k = 0; k < contacts.size(); ++k)
+    for (int i = 0; i < contacts[k].count; ++i) {
+      const std::size_t v = std::size_t(contacts[k].vertex[i]);
+      if (contacts[k].weight[i] > weight[v]) weight[v] = contacts[k].weight[i], strongest[v] = int(k);
+    }
+  return strongest;
+}
+
 }  // namespace
 
 StepReport Integrator::advance(State& state) {
@@ -234,11 +252,11 @@ StepReport Integrator::advance(State& state) {
     air_forces = w.forces;
     for (int v = 0; v < n; ++v) air_forces[v] -= m.masses[v] * m.scene.gravity;
   }
-  if (m.scene.solver.kind == SolverKind::Cholmod) find_contacts(state);
+  if (m.scene.solver.kind == SolverKind::Cholmod || (projective_ && m.scene.solver.history > 0)) find_contacts(state);
   else w.contacts.clear();
   if (!(projective_ ? solve_projective(state, pinned_dv, report) : solve_linearised(state, pinned_dv, report)))
     return report;
-  report.external_work = source_work(pinned_dv, air_forces, state.velocities) + (projective_ ? 0 : w.contact_work);
+  report.external_work = source_work(pinned_dv, air_forces, state.velocities) + w.contact_work;
   const bool obstacles_move = std::any_of(m.obstacles.begin(), m.obstacles.end(),
                                           [](const Obstacle& o) { return o.spec.motion.moves(); });
   const Scalar kinetic_before_response = obstacles_move ? kinetic_energy(m, state) : 0;
@@ -348,6 +366,7 @@ void Integrator::find_contacts(const State& state) {
       contact.normal = c.normal;
       contact.surface_velocity = c.surface_velocity;
       contact.target = c.normal.dot(c.surface_velocity);
+      contact.analytic = true;
       w.contacts.push_back(contact);
     }
   }
@@ -355,6 +374,7 @@ void Integrator::find_contacts(const State& state) {
     const auto mesh = collisions_->mesh_contacts(state.positions, state.time, h, reach);
     w.contacts.insert(w.contacts.end(), mesh.begin(), mesh.end());
   }
+  if (projective_) return;  // its contacts are terms of its objective, not blocks of a matrix
   // Each contact's place in the matrix: the blocks joining its vertices. A contact whose
   // vertices the matrix does not join (no spring between them) keeps its heaviest vertex alone.
   w.contact_blocks.clear();
@@ -450,13 +470,7 @@ bool Integrator::solve_linearised(State& state, const std::vector<Vec3>& pinned_
   };
   std::vector<Friction> frictions;  // on moving obstacles, for the work they do
   if (mu > 0 && !w.contacts.empty()) {
-    std::vector<int> strongest(std::size_t(n), -1);  // vertex -> its contact of largest weight
-    std::vector<Scalar> weight(std::size_t(n), 0);
-    for (std::size_t k = 0; k < w.contacts.size(); ++k)
-      for (int i = 0; i < w.contacts[k].count; ++i) {
-        const std::size_t v = std::size_t(w.contacts[k].vertex[i]);
-        if (w.contacts[k].weight[i] > weight[v]) weight[v] = w.contacts[k].weight[i], strongest[v] = int(k);
-      }
+    const std::vector<int> strongest = strongest_contacts(w.contacts, n);
     for (int v = 0; v < n; ++v) {
       const int k = strongest[std::size_t(v)];
       if (k < 0 || !(w.normal_force[std::size_t(v)] > 0)) continue;
@@ -560,7 +574,34 @@ bool Integrator::solve_projective(State& state, const std::vector<Vec3>& pinned_
   for (std::size_t v = 0; v < n; ++v)
     positions[v] = state.positions[v] + h * (state.velocities[v] + pinned_dv[v]) +
                    (w.free_index[v] >= 0 ? Vec3(h * h / m.masses[v] * w.explicit_forces[v]) : Vec3::Zero());
-  if (!iterate_projective(state.positions, positions, report, "the projective solver failed: ")) return false;
+  // The contacts held in the solve (L-BFGS only): the analytic obstacles at the step's end,
+  // the mesh contacts of its start, and friction from the normal forces of the step before.
+  ProjectiveContacts& contacts = w.projective_contacts;
+  contacts = {};
+  contacts.slip = FRICTION_SLIP;
+  if (m.scene.solver.history > 0 && m.scene.collisions.obstacles) {
+    contacts.analytic = std::any_of(m.obstacles.begin(), m.obstacles.end(),
+                                    [](const Obstacle& o) { return o.spec.kind != ObstacleSpec::Kind::Mesh; });
+    contacts.t_end = state.time + h;
+    contacts.thickness = m.scene.collisions.thickness;
+    contacts.margin = HELD_GAP * m.scene.collisions.thickness;
+    for (const SolveContact& c : w.contacts)
+      if (!c.analytic) contacts.mesh.push_back(c);
+    if (m.scene.friction > 0) {
+      const std::vector<int> strongest = strongest_contacts(w.contacts, int(n));
+      for (std::size_t v = 0; v < n; ++v)
+        if (strongest[v] >= 0 && w.normal_force[v] > 0) {
+          const SolveContact& c = w.contacts[std::size_t(strongest[v])];
+          contacts.friction.push_back({int(v), c.normal, c.surface_velocity, m.scene.friction * w.normal_force[v]});
+        }
+    }
+  }
+  if (!iterate_projective(state.positions, positions, report, "the projective solver failed: ", nullptr, &contacts))
+    return false;
+  // The normal forces, for the next step's friction; the contacts' work, for the ledger.
+  w.normal_force.assign(n, 0);
+  for (std::size_t v = 0; v < n; ++v) w.normal_force[v] = projective_->contact_impulses()[v] / h;
+  w.contact_work = projective_->contact_work();
   for (std::size_t v = 0; v < n; ++v)
     state.velocities[v] = w.free_index[v] >= 0 ? Vec3((positions[v] - state.positions[v]) / h)
                                                : Vec3(state.velocities[v] + pinned_dv[v]);
@@ -715,14 +756,15 @@ void Integrator::spread_response(const std::vector<Vec3>& solved, const std::vec
 }
 
 bool Integrator::iterate_projective(const std::vector<Vec3>& start, std::vector<Vec3>& positions, StepReport& report,
-                                    const std::string& failure, const HeldVertices* held) {
+                                    const std::string& failure, const HeldVertices* held,
+                                    const ProjectiveContacts* contacts) {
   const Workspace& w = *work_;
   const auto begin = std::chrono::steady_clock::now();
   std::string error;
-  const bool ok = projective_->solve({h_, &start, &w.start_velocities, &w.explicit_forces}, positions, error, held,
-                                     RESPONSE_HOLD);
+  const bool ok = projective_->solve({h_, &start, &w.start_velocities, &w.explicit_forces, contacts}, positions, error,
+                                     held, RESPONSE_HOLD);
   report.solve_ms += std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - begin).count();
-  report.solver_iterations += model_.scene.solver.iterations;
+  report.solver_iterations += projective_->iterations_done();
   if (!ok) {
     report.ok = false;
     report.failure = failure + error;
@@ -747,7 +789,7 @@ void Integrator::spread_projective(const std::vector<Vec3>& start, const std::ve
     held.targets.clear();
     for (int v : held.vertices) held.targets.push_back(positions[std::size_t(v)]);
     if (!iterate_projective(start, positions, report, "the projective solver failed spreading the collision response: ",
-                            &held))
+                            &held, model_.scene.solver.history > 0 ? &w.projective_contacts : nullptr))
       return false;
     for (std::size_t v = 0; v < n; ++v)
       if (w.free_index[v] >= 0) result[v] = (positions[v] - start[v]) / h;

@@ -14,17 +14,46 @@ constexpr Eigen::Index SUPERNODAL_MIN_ROWS = 15000;
 
 class CholmodSolver final : public LinearSolver {
  public:
+  explicit CholmodSolver(int stale_iterations) : stale_iterations_(stale_iterations) {}
   SolveReport solve(const SparseMatrix& A, const VectorX& b, VectorX& x) override {
     SolveReport report;
+    matrix_ = &A;
+    const bool skip = skip_ > 0;
+    if (skip) --skip_;
+    if (stale_iterations_ > 0 && fresh_ && same_pattern(A) && !skip) {
+      // The factorisation of an earlier matrix as the preconditioner of a conjugate gradient:
+      // refactorised only when that takes more than stale_iterations_. After a failure the
+      // next 1, 2, 4, 4, ... solves factorise at once (the matrix is changing fast: a swing,
+      // contacts coming and going), so failures cost at most a fraction of the work.
+      if (preconditioned(A, b, x, report)) {
+        backoff_ = 0;
+        return report;
+      }
+      backoff_ = std::min(std::max(1, 2 * backoff_), MAX_BACKOFF);
+      skip_ = backoff_;
+    }
     if (!factor_.factorise(A)) {
+      fresh_ = false;
       report.ok = false;
       report.error = "CHOLMOD could not factorise the system matrix (not positive definite)";
       return report;
     }
+    remember(A);
+    fresh_ = true;
+    stale_ = false;
     return solve_again(b, x);
   }
   SolveReport solve_again(const VectorX& b, VectorX& x) override {
     SolveReport report;
+    if (stale_) {
+      if (preconditioned(*matrix_, b, x, report)) return report;
+      if (!factor_.factorise(*matrix_)) {
+        report.ok = false;
+        report.error = "CHOLMOD could not factorise the system matrix (not positive definite)";
+        return report;
+      }
+      stale_ = false;
+    }
     report.iterations = 1;
     if (!factor_.solve(b, x)) {
       report.ok = false;
@@ -33,9 +62,51 @@ class CholmodSolver final : public LinearSolver {
     return report;
   }
   int analyses() const override { return factor_.analyses(); }
+  int factorisations() const override { return factor_.factorisations(); }
 
  private:
+  bool same_pattern(const SparseMatrix& A) const {
+    return A.rows() == rows_ && A.nonZeros() == nonzeros_;
+  }
+  void remember(const SparseMatrix& A) { rows_ = A.rows(), nonzeros_ = A.nonZeros(); }
+  // Conjugate gradient on A x = b preconditioned by the kept factorisation (of an earlier
+  // matrix with the same pattern) until the preconditioned residual r' P^-1 r, which tracks
+  // the error in A's norm, is STALE_TOLERANCE^2 of b' P^-1 b; false when that takes more than
+  // stale_iterations_ iterations (x is then to be solved afresh).
+  bool preconditioned(const SparseMatrix& A, const VectorX& b, VectorX& x, SolveReport& report) {
+    if (!factor_.solve(b, x)) return false;
+    const Scalar target = STALE_TOLERANCE * STALE_TOLERANCE * b.dot(x);
+    r_ = b - A * x;
+    for (int k = 1; k <= stale_iterations_; ++k) {
+      if (!factor_.solve(r_, z_)) return false;
+      const Scalar rz = r_.dot(z_);
+      if (rz <= target) {
+        report.iterations = k;
+        stale_ = true;
+        return true;
+      }
+      if (k == 1) p_ = z_;
+      else p_ = z_ + (rz / rz_) * p_;
+      rz_ = rz;
+      q_ = A * p_;
+      const Scalar alpha = rz / p_.dot(q_);
+      if (!(alpha > 0)) return false;
+      x += alpha * p_;
+      r_ -= alpha * q_;
+    }
+    return false;
+  }
+  static constexpr Scalar STALE_TOLERANCE = 1e-10;
+  static constexpr int MAX_BACKOFF = 4;
+  int backoff_ = 0, skip_ = 0;  // solves to factorise at once after a failure
   CholmodFactor factor_;
+  int stale_iterations_ = 0;
+  bool fresh_ = false;   // a factorisation exists
+  bool stale_ = false;   // the last solve's matrix is not the factorised one
+  const SparseMatrix* matrix_ = nullptr;
+  Eigen::Index rows_ = 0, nonzeros_ = 0;
+  VectorX r_, z_, p_, q_;
+  Scalar rz_ = 0;
 };
 
 class ConjugateGradientSolver final : public LinearSolver {
@@ -86,7 +157,7 @@ struct CholmodFactor::Impl {
     inner.assign(A.innerIndexPtr(), A.innerIndexPtr() + A.nonZeros());
   }
   Eigen::CholmodDecomposition<SparseMatrix, Eigen::Lower> llt;
-  int analyses = 0;
+  int analyses = 0, factorisations = 0;
   bool empty = false;  // the last matrix had no rows
   Eigen::Index rows = 0, nonzeros = 0;
   std::vector<SparseMatrix::StorageIndex> outer, inner;
@@ -109,6 +180,7 @@ bool CholmodFactor::factorise(const SparseMatrix& A) {
     f.remember_pattern(A);
   }
   f.llt.factorize(A);
+  ++f.factorisations;
   return f.llt.info() == Eigen::Success;
 }
 
@@ -132,10 +204,11 @@ bool CholmodFactor::solve(const VectorX& b, VectorX& x) const {
 }
 
 int CholmodFactor::analyses() const { return impl_->analyses; }
+int CholmodFactor::factorisations() const { return impl_->factorisations; }
 
 std::unique_ptr<LinearSolver> make_linear_solver(const SolverSpec& spec) {
   if (spec.kind == SolverKind::ConjugateGradient) return std::make_unique<ConjugateGradientSolver>(spec);
-  return std::make_unique<CholmodSolver>();
+  return std::make_unique<CholmodSolver>(spec.factor_reuse);
 }
 
 }  // namespace drape

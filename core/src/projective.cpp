@@ -1,16 +1,33 @@
 #include "projective.h"
 
+#include "drape/core/obstacle.h"
+
 #include <algorithm>
+#include <cmath>
 #include <limits>
 
 namespace drape {
+namespace {
+
+// The mean rest length of the stretch springs (the cloth's edges), m; 0 without any.
+Scalar mean_edge(const Model& model) {
+  Scalar sum = 0;
+  int count = 0;
+  for (const Spring& s : model.springs)
+    if (s.kind == SpringKind::Stretch) sum += s.rest_length, ++count;
+  return count > 0 ? sum / count : 0;
+}
+
+}  // namespace
 
 ProjectiveSolver::ProjectiveSolver(const Model& model, std::vector<int> free_index, int free_count)
     : model_(model),
       free_index_(std::move(free_index)),
       free_count_(free_count),
       iterations_(model.scene.solver.iterations),
-      rho_(model.scene.solver.chebyshev) {
+      history_(model.scene.solver.history),
+      rho_(model.scene.solver.chebyshev),
+      converged_move_(model.scene.solver.tolerance * mean_edge(model)) {
   base_.assign(std::size_t(free_count_), Vec3::Zero());
   sums_ = base_;
   predicted_ = base_;
@@ -62,6 +79,7 @@ bool ProjectiveSolver::solve(const ProjectiveStep& step, std::vector<Vec3>& posi
   const Model& m = model_;
   const Scalar h = step.h;
   const std::vector<Vec3>& x0 = *step.start;
+  iterations_done_ = 0;
   System* sys = system(h, error);
   if (!sys) return false;
   const CholmodFactor* factor = &sys->factor;
@@ -82,6 +100,17 @@ bool ProjectiveSolver::solve(const ProjectiveStep& step, std::vector<Vec3>& posi
     const Vec3 inertial = mass * (x0[v] + h * (*step.velocities)[v]) + h * h * (*step.forces)[v];
     base_[std::size_t(a)] = inertial + h * m.air_damping[v] * mass * (x0[v] + h * wind);
     predicted_[std::size_t(a)] = x0[v] + h * (*step.velocities)[v] + h * h / mass * (*step.forces)[v];
+  }
+  // L-BFGS keeps the held vertices at their targets (its steps leave them out: no new
+  // factorisation); local-global holds them by a penalty in a system factorised for them.
+  fixed_.assign(std::size_t(free_count_), 0);
+  if (held && history_ > 0) {
+    for (std::size_t k = 0; k < held->vertices.size(); ++k) {
+      const std::size_t v = std::size_t(held->vertices[k]);
+      fixed_[std::size_t(free_index_[v])] = 1;
+      positions[v] = held->targets[k];
+    }
+    held = nullptr;
   }
   if (held && !held->vertices.empty()) {
     HeldKey key{h, hold, held->vertices};
@@ -106,23 +135,198 @@ bool ProjectiveSolver::solve(const ProjectiveStep& step, std::vector<Vec3>& posi
     factor = &held_factor_;
   }
 
-  // The objective being minimised, at the current positions: its vertices' part here, the
-  // springs' in the local step's pass.
-  const auto vertex_objective = [&](const std::vector<Vec3>& x) {
-    Scalar total = 0;
+  step_ = {sys, factor, &step, held};
+  iterations_done_ = 0;
+  contact_impulse_.assign(positions.size(), 0);
+  contact_work_ = 0;
+  shapes_.clear();
+  if (step.contacts && history_ > 0) {
+    // Each held contact's weight, from its vertices' masses; a mesh contact's bound:
+    // its cloth points' normal position at the start plus what the surface moves in the step.
+    const ProjectiveContacts& c = *step.contacts;
+    vertex_stiffness_.resize(std::size_t(free_count_));
+    for (std::size_t v = 0; v < x0.size(); ++v)
+      if (const int a = free_index_[v]; a >= 0) vertex_stiffness_[std::size_t(a)] = CONTACT_HOLD * m.masses[v];
+    shapes_.clear();
+    if (c.analytic)
+      for (const Obstacle& obstacle : m.obstacles) {
+        const ObstacleSpec& o = obstacle.spec;
+        if (o.kind == ObstacleSpec::Kind::Sphere)
+          shapes_.push_back({&obstacle, true, o.motion.position(o.center, c.t_end), Vec3::UnitZ(), o.radius});
+        else if (o.kind == ObstacleSpec::Kind::Plane) {
+          const Vec3 point = o.motion.position(o.point, c.t_end);
+          shapes_.push_back({&obstacle, false, point, (o.motion.position(o.point + o.normal, c.t_end) - point).normalized(), 0});
+        }
+      }
+    // The gap each free vertex keeps from each: its distance at the step's start, at most the
+    // margin (one that starts within the thickness is pushed out by the response, which moves
+    // it without giving it speed).
+    kept_gap_.resize(shapes_.size() * std::size_t(free_count_));
+    for (std::size_t k = 0; k < shapes_.size(); ++k)
+      for (std::size_t v = 0; v < x0.size(); ++v)
+        if (const int a = free_index_[v]; a >= 0)
+          kept_gap_[k * std::size_t(free_count_) + std::size_t(a)] =
+              std::min(analytic_contact(*shapes_[k].obstacle, c.t_end - h, x0[v]).signed_distance, c.margin);
+    contact_bound_.resize(c.mesh.size());
+    contact_stiffness_.resize(c.mesh.size());
+    for (std::size_t k = 0; k < c.mesh.size(); ++k) {
+      const SolveContact& contact = c.mesh[k];
+      Scalar bound = h * contact.target, stiffness = 0;
+      for (int i = 0; i < contact.count; ++i) {
+        const std::size_t v = std::size_t(contact.vertex[i]);
+        bound += contact.weight[i] * contact.normal.dot(x0[v]);
+        if (free_index_[v] >= 0) stiffness = std::max(stiffness, vertex_stiffness_[std::size_t(free_index_[v])]);
+      }
+      contact_bound_[k] = bound;
+      contact_stiffness_[k] = stiffness;
+    }
+  }
+  const bool ok = history_ > 0 ? quasi_newton(positions, error) : local_global(positions, error);
+  if (ok && step.contacts && history_ > 0) contact_terms(positions, nullptr, true);
+  step_ = {};
+  return ok;
+}
+
+Scalar ProjectiveSolver::contact_terms(const std::vector<Vec3>& x, std::vector<Vec3>* gradient, bool impulses) {
+  const ProjectiveContacts* c = step_.step->contacts;
+  if (!c || history_ == 0) return 0;
+  const Scalar h = step_.step->h;
+  const std::vector<Vec3>& x0 = *step_.step->start;
+  Scalar total = 0;
+  // The spheres and planes (posed at the step's end): a one-sided quadratic on each free
+  // vertex's depth within the thickness (continuous in its gradient, as L-BFGS needs).
+  for (std::size_t k = 0; k < shapes_.size(); ++k) {
+    const PosedShape& shape = shapes_[k];
+    const Scalar* kept_gap = kept_gap_.data() + k * std::size_t(free_count_);
     for (std::size_t v = 0; v < x.size(); ++v) {
       const int a = free_index_[v];
       if (a < 0) continue;
-      const Scalar mass = m.masses[v];
-      total += 0.5 * mass * (x[v] - predicted_[std::size_t(a)]).squaredNorm() +
-               0.5 * h * m.air_damping[v] * mass * (x[v] - x0[v] - h * wind).squaredNorm();
+      Vec3 normal = shape.normal;
+      Scalar distance = 0;
+      if (shape.sphere) {
+        const Vec3 offset = x[v] - shape.point;
+        const Scalar length = offset.norm();
+        if (length > 0) normal = offset / length;
+        distance = length - shape.radius;
+      } else {
+        distance = normal.dot(x[v] - shape.point);
+      }
+      const Scalar depth = kept_gap[a] - distance;
+      if (!(depth > 0)) continue;
+      const Scalar stiffness = vertex_stiffness_[std::size_t(a)];
+      total += 0.5 * stiffness * depth * depth;
+      if (gradient) (*gradient)[std::size_t(a)] -= stiffness * depth * normal;
+      if (impulses) {
+        const Scalar impulse = stiffness * depth / h;  // the term's force is its gradient over h^2
+        contact_impulse_[v] += impulse;
+        contact_work_ += impulse * normal.dot(analytic_contact(*shape.obstacle, c->t_end, x[v]).surface_velocity);
+      }
     }
-    if (held)
-      for (std::size_t k = 0; k < held->vertices.size(); ++k)
-        total += 0.5 * held_penalty_[k] * (x[std::size_t(held->vertices[k])] - held->targets[k]).squaredNorm();
-    return total;
-  };
+  }
+  // The mesh contacts: the same on how far their cloth points fall short of their bound.
+  for (std::size_t k = 0; k < c->mesh.size(); ++k) {
+    const SolveContact& contact = c->mesh[k];
+    Scalar reached = 0;
+    for (int i = 0; i < contact.count; ++i) reached += contact.weight[i] * contact.normal.dot(x[std::size_t(contact.vertex[i])]);
+    const Scalar depth = contact_bound_[k] - reached;
+    if (!(depth > 0)) continue;
+    const Scalar stiffness = contact_stiffness_[k];
+    total += 0.5 * stiffness * depth * depth;
+    for (int i = 0; i < contact.count; ++i) {
+      const std::size_t v = std::size_t(contact.vertex[i]);
+      const int a = free_index_[v];
+      if (gradient && a >= 0) (*gradient)[std::size_t(a)] -= contact.weight[i] * stiffness * depth * contact.normal;
+      if (impulses) contact_impulse_[v] += contact.weight[i] * stiffness * depth / h;
+    }
+    if (impulses) contact_work_ += stiffness * depth / h * contact.normal.dot(contact.surface_velocity);
+  }
+  // Friction: Coulomb's force against the slip u over the step, smoothed below the sticking
+  // speed (the lagged friction potential of Li et al., "Incremental potential contact", 2020,
+  // section 5): h^2 F f0(|u|) with f0(y) = y beyond eps h and -y^3 / (3 eps^2 h^2) + y^2 /
+  // (eps h) + eps h / 3 below it. Its stiffness while sticking, 2 h F / eps, is kept within
+  // the vertex's contact weight (a larger eps h: a creep of at most 2 h^2 F over that weight
+  // a step), or L-BFGS, whose first inverse Hessian lacks it, would stall.
+  for (const FrictionContact& f : c->friction) {
+    const std::size_t v = std::size_t(f.vertex);
+    const int a = free_index_[v];
+    if (a < 0) continue;
+    const Scalar eps_h = std::max(c->slip * h, 2 * h * h * f.force / vertex_stiffness_[std::size_t(a)]);
+    const Vec3 moved = x[v] - x0[v] - h * f.surface_velocity;
+    const Vec3 u = moved - moved.dot(f.normal) * f.normal;
+    const Scalar y = u.norm();
+    const Scalar f0 = y >= eps_h ? y : -y * y * y / (3 * eps_h * eps_h) + y * y / eps_h + eps_h / 3;
+    const Scalar f1_over_y = y >= eps_h ? 1 / y : -y / (eps_h * eps_h) + 2 / eps_h;  // f0'(y) / y
+    total += h * h * f.force * f0;
+    if (gradient) (*gradient)[std::size_t(a)] += (h * h * f.force * f1_over_y) * u;
+    if (impulses) contact_work_ -= h * f.force * f1_over_y * u.dot(f.surface_velocity);
+  }
+  if (impulses) contact_work_ = std::max<Scalar>(0, contact_work_);
+  return total;
+}
 
+Scalar ProjectiveSolver::evaluate(const std::vector<Vec3>& x, Block* gradient) {
+  const Model& m = model_;
+  const System& sys = *step_.system;
+  const Scalar h = step_.step->h;
+  const std::vector<Vec3>& x0 = *step_.step->start;
+  const Vec3 wind = m.scene.wind ? m.scene.wind->velocity : Vec3::Zero();
+  // With a gradient (L-BFGS) each term adds its own to it; without (local-global) the local
+  // step's right-hand side is summed instead (the global step's matrix times x less it is the
+  // same gradient: each target minimises its term).
+  std::vector<Vec3>& g = gradient_rows_;  // the gradient's rows, contiguous while summed
+  if (gradient) g.assign(std::size_t(free_count_), Vec3::Zero());
+  else sums_ = base_;
+  // The vertices' part: inertia, the air's damping, the held vertices' penalty.
+  Scalar total = 0;
+  for (std::size_t v = 0; v < x.size(); ++v) {
+    const int a = free_index_[v];
+    if (a < 0) continue;
+    const Scalar mass = m.masses[v], air = h * m.air_damping[v] * mass;
+    const Vec3 inertia = x[v] - predicted_[std::size_t(a)], drag = x[v] - x0[v] - h * wind;
+    total += 0.5 * mass * inertia.squaredNorm() + 0.5 * air * drag.squaredNorm();
+    if (gradient) g[std::size_t(a)] = mass * inertia + air * drag;
+  }
+  if (const HeldVertices* held = step_.held)
+    for (std::size_t k = 0; k < held->vertices.size(); ++k) {
+      const Vec3 off = x[std::size_t(held->vertices[k])] - held->targets[k];
+      total += 0.5 * held_penalty_[k] * off.squaredNorm();
+      if (gradient) g[std::size_t(free_index_[std::size_t(held->vertices[k])])] += held_penalty_[k] * off;
+    }
+  // The springs: elastic energy of the length's change and damping along the direction at the
+  // step's start. The local step's targets: p = r d (rest length along the current direction
+  // d) and q = z - ((z - z0) . d0) d0, weighted.
+  for (std::size_t k = 0; k < sys.springs.size(); ++k) {
+    const SpringTerm& s = sys.springs[k];
+    const Vec3 z = x[std::size_t(s.i)] - x[std::size_t(s.j)];
+    const Scalar length = z.norm();
+    // A spring of zero length has no direction: its start's, or any.
+    const Vec3 d = length > 0 ? Vec3(z / length) : spring_direction_[k];
+    // The damping acts along the spring's direction at the step's start (as the reference
+    // solver's does): q is z's projection onto a fixed plane, so the iteration never raises
+    // the objective.
+    const Vec3& d0 = spring_direction_[k];
+    const Scalar along = (z - spring_start_[k]).dot(d0);
+    total += 0.5 * s.elastic * (length - s.rest) * (length - s.rest) + 0.5 * s.viscous * along * along;
+    if (gradient) {
+      const Vec3 pull = s.elastic * (length - s.rest) * d + s.viscous * along * d0;
+      if (s.a >= 0) g[std::size_t(s.a)] += pull;
+      if (s.b >= 0) g[std::size_t(s.b)] -= pull;
+      continue;
+    }
+    const Vec3 target = (s.elastic * s.rest) * d + s.viscous * (z - along * d0);
+    const Scalar weight = s.elastic + s.viscous;
+    if (s.a >= 0) sums_[std::size_t(s.a)] += s.b >= 0 ? target : Vec3(target + weight * x[std::size_t(s.j)]);
+    if (s.b >= 0) sums_[std::size_t(s.b)] += s.a >= 0 ? Vec3(-target) : Vec3(weight * x[std::size_t(s.i)] - target);
+  }
+  total += contact_terms(x, gradient ? &g : nullptr, false);
+  if (gradient) {
+    gradient->resize(free_count_, 3);
+    for (int a = 0; a < free_count_; ++a) gradient->row(a) = g[std::size_t(a)].transpose();
+  }
+  return total;
+}
+
+bool ProjectiveSolver::local_global(std::vector<Vec3>& positions, std::string& error) {
   // Chebyshev semi-iterative acceleration (Wang, "A Chebyshev semi-iterative approach for
   // accelerating projective and position-based dynamics", SIGGRAPH Asia 2015, eq. 11) with
   // the iteration's spectral radius estimate rho. The plain iteration never raises the
@@ -135,29 +339,9 @@ bool ProjectiveSolver::solve(const ProjectiveStep& step, std::vector<Vec3>& posi
   best_ = positions;
   Scalar omega = 1, best_objective = std::numeric_limits<Scalar>::infinity();
   int accelerated = 0;  // global steps since the acceleration (re)started
+  iterations_done_ = 0;
   for (int pass = 0; pass <= iterations_; ++pass) {
-    // Local step: each spring's rest-length target p = r d and damping target q = z - ((z -
-    // z0) . d) d, weighted; and the objective at the current positions.
-    sums_ = base_;
-    Scalar objective = vertex_objective(positions);
-    for (std::size_t k = 0; k < sys->springs.size(); ++k) {
-      const SpringTerm& s = sys->springs[k];
-      const Vec3 z = positions[std::size_t(s.i)] - positions[std::size_t(s.j)];
-      const Scalar length = z.norm();
-      // A spring of zero length has no direction: its start's, or any.
-      const Vec3 d = length > 0 ? Vec3(z / length) : spring_direction_[k];
-      // The damping acts along the spring's direction at the step's start (as the reference
-      // solver's does): q is z's projection onto a fixed plane, so the iteration never raises
-      // the objective.
-      const Vec3& d0 = spring_direction_[k];
-      const Scalar along = (z - spring_start_[k]).dot(d0);
-      objective += 0.5 * s.elastic * (length - s.rest) * (length - s.rest) + 0.5 * s.viscous * along * along;
-      // The weighted targets: rest length along d (elastic), z less its change along d0 (viscous).
-      const Vec3 target = (s.elastic * s.rest) * d + s.viscous * (z - along * d0);
-      const Scalar weight = s.elastic + s.viscous;
-      if (s.a >= 0) sums_[std::size_t(s.a)] += s.b >= 0 ? target : Vec3(target + weight * positions[std::size_t(s.j)]);
-      if (s.b >= 0) sums_[std::size_t(s.b)] += s.a >= 0 ? Vec3(-target) : Vec3(weight * positions[std::size_t(s.i)] - target);
-    }
+    const Scalar objective = evaluate(positions, nullptr);
     if (objective < best_objective) {
       best_objective = objective;
       best_ = positions;
@@ -171,10 +355,11 @@ bool ProjectiveSolver::solve(const ProjectiveStep& step, std::vector<Vec3>& posi
     if (pass == iterations_) break;  // the last pass only weighs the last iterate
     // Global step: the run's factorisation.
     for (int a = 0; a < free_count_; ++a) rhs_.row(a) = sums_[std::size_t(a)].transpose();
-    if (!factor->solve(rhs_, solution_)) {
+    if (!step_.factor->solve(rhs_, solution_)) {
       error = "CHOLMOD's solve of the projective system failed";
       return false;
     }
+    ++iterations_done_;
     omega = rho <= 0 || accelerated == 0 ? 1 : accelerated == 1 ? 2 / (2 - rho * rho) : 4 / (4 - rho * rho * omega);
     ++accelerated;
     for (std::size_t v = 0; v < positions.size(); ++v) {
@@ -187,6 +372,98 @@ bool ProjectiveSolver::solve(const ProjectiveStep& step, std::vector<Vec3>& posi
     }
   }
   positions = best_;
+  objective_ = best_objective;
+  return true;
+}
+
+bool ProjectiveSolver::quasi_newton(std::vector<Vec3>& positions, std::string& error) {
+  // L-BFGS on the step's objective with the global step's matrix P as the first inverse
+  // Hessian (Liu, Bouaziz and Kavan, "Quasi-Newton methods for real-time simulation of
+  // hyperelastic materials", ACM TOG 2017): with no history its step -P^-1 g is exactly one
+  // local-global iteration; the history of steps s and gradient changes t bends it towards
+  // the springs' true curvature, which the constant P lacks (slack and compressed springs,
+  // the cloth's soft modes). A step is taken whole when it lowers the objective enough
+  // (Armijo), else halved; a direction that does not descend restarts the history.
+  const auto dot = [](const Block& a, const Block& b) { return (a.array() * b.array()).sum(); };
+  const int memory = history_;
+  history_s_.resize(std::size_t(memory));
+  history_t_.resize(std::size_t(memory));
+  history_rho_.assign(std::size_t(memory), 0);
+  std::vector<Scalar> alpha(static_cast<std::size_t>(memory), 0.0);
+  int stored = 0, newest = -1;  // the history is a ring
+  iterations_done_ = 0;
+  const auto leave_out_fixed = [&](Block& rows) {
+    for (int a = 0; a < free_count_; ++a)
+      if (fixed_[std::size_t(a)]) rows.row(a).setZero();
+  };
+  Scalar objective = evaluate(positions, &gradient_);
+  leave_out_fixed(gradient_);
+  trial_ = positions;
+  for (int iteration = 0; iteration < iterations_; ++iteration) {
+    // The two-loop recursion: direction = -H g.
+    direction_ = gradient_;
+    for (int k = 0; k < stored; ++k) {
+      const std::size_t i = std::size_t((newest - k + memory) % memory);
+      alpha[i] = history_rho_[i] * dot(history_s_[i], direction_);
+      direction_ -= alpha[i] * history_t_[i];
+    }
+    if (!step_.factor->solve(direction_, solution_)) {
+      error = "CHOLMOD's solve of the projective system failed";
+      return false;
+    }
+    ++iterations_done_;
+    direction_ = solution_;
+    leave_out_fixed(direction_);
+    for (int k = stored - 1; k >= 0; --k) {
+      const std::size_t i = std::size_t((newest - k + memory) % memory);
+      const Scalar beta = history_rho_[i] * dot(history_t_[i], direction_);
+      direction_ += (alpha[i] - beta) * history_s_[i];
+    }
+    direction_ = -direction_;
+    Scalar slope = dot(gradient_, direction_);
+    if (!(slope < 0)) {  // not a descent direction: start the history again (the next iteration)
+      if (stored == 0) break;  // at a stationary point already
+      stored = 0;
+      continue;
+    }
+    // Backtracking from the whole step, each shorter step the minimum of the quadratic through
+    // the objective, its slope and the last trial (kept within a hundredth and a half of the
+    // last step): the first steps after many contacts begin at once can be far too long along
+    // the few directions the run's matrix knows only by their masses.
+    Scalar step = 1, taken = 0, tried = objective;  // taken: the step trial_ was evaluated at
+    for (int shortening = 0; shortening < MAX_LINE_SEARCH_STEPS; ++shortening) {
+      for (std::size_t v = 0; v < positions.size(); ++v)
+        if (const int a = free_index_[v]; a >= 0) trial_[v] = positions[v] + step * Vec3(direction_.row(a).transpose());
+      tried = evaluate(trial_, &trial_gradient_);
+      leave_out_fixed(trial_gradient_);
+      taken = step;
+      if (tried <= objective + ARMIJO * step * slope) break;
+      const Scalar curvature = tried - objective - slope * step;  // of the quadratic, times step^2
+      const Scalar minimum = curvature > 0 ? -slope * step * step / (2 * curvature) : 0.5 * step;
+      step = std::clamp(minimum, 0.01 * step, 0.5 * step);
+    }
+    if (!(tried < objective)) break;  // no progress along it: as good as this iteration gets
+    // s = the step, t = the gradient's change; kept (over the oldest pair once the history is
+    // full) only when the curvature along s is positive.
+    step_s_ = taken * direction_;
+    step_t_ = trial_gradient_ - gradient_;
+    const Scalar curvature = dot(step_s_, step_t_);
+    if (curvature > std::numeric_limits<Scalar>::epsilon() * std::sqrt(dot(step_s_, step_s_) * dot(step_t_, step_t_))) {
+      newest = (newest + 1) % memory;
+      history_s_[std::size_t(newest)].swap(step_s_);
+      history_t_[std::size_t(newest)].swap(step_t_);
+      history_rho_[std::size_t(newest)] = 1 / curvature;
+      stored = std::min(stored + 1, memory);
+    }
+    positions.swap(trial_);
+    trial_ = positions;
+    gradient_.swap(trial_gradient_);
+    objective = tried;
+    // Converged when a whole step moved no vertex by more than the tolerance's share of an
+    // edge (a shortened one says nothing about the distance left).
+    if (taken == 1 && direction_.rowwise().norm().maxCoeff() <= converged_move_) break;
+  }
+  objective_ = objective;
   return true;
 }
 

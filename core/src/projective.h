@@ -25,10 +25,36 @@
 #include <string>
 #include <vector>
 
+#include "drape/core/collision.h"
 #include "drape/core/linear_solver.h"
 #include "drape/core/model.h"
 
 namespace drape {
+
+/// Lagged Coulomb friction on one contact vertex: the normal force its contacts made the step
+/// before, times the friction coefficient, against its slip across the contact's normal
+/// relative to the obstacle's surface.
+struct FrictionContact {
+  int vertex = 0;
+  Vec3 normal = Vec3::UnitZ();
+  Vec3 surface_velocity = Vec3::Zero();
+  Scalar force = 0;  ///< N: friction coefficient times the normal force
+};
+
+/// The contacts held in the solve: the scene's spheres and planes kept away from every free
+/// vertex at the step's end by as much as the vertex was at its start, at most the margin (a
+/// held contact yields a little: within the margin, outside the thickness, where the response
+/// has nothing to do); the mesh obstacles' contacts of the step's start,
+/// whose cloth points may not approach their obstacle faster than its surface; friction.
+struct ProjectiveContacts {
+  bool analytic = false;  ///< hold the spheres and planes
+  Scalar t_end = 0;       ///< s: where they are
+  Scalar thickness = 0;   ///< m
+  Scalar margin = 0;      ///< m, at least the thickness
+  std::vector<SolveContact> mesh;  ///< mesh contacts only (SolveContact::analytic false)
+  std::vector<FrictionContact> friction;
+  Scalar slip = 1e-4;  ///< m/s: slower than this a vertex sticks (friction's smoothing)
+};
 
 /// What one step starts from.
 struct ProjectiveStep {
@@ -36,6 +62,7 @@ struct ProjectiveStep {
   const std::vector<Vec3>* start = nullptr;       ///< x0, every vertex
   const std::vector<Vec3>* velocities = nullptr;  ///< v0, every vertex
   const std::vector<Vec3>* forces = nullptr;      ///< explicit forces f (gravity, wind drag), every vertex
+  const ProjectiveContacts* contacts = nullptr;   ///< held in the solve (L-BFGS only), or none
 };
 
 /// Free vertices held (a penalty) to target end positions: the collision response spread
@@ -51,14 +78,23 @@ class ProjectiveSolver {
   ProjectiveSolver(const Model& model, std::vector<int> free_index, int free_count);
   /// Runs the scene's iterations from positions (every vertex: the first guess for the free
   /// ones, the end positions of the pinned ones) and leaves the end of the step there. With
-  /// held, the held vertices keep to their targets (a penalty of hold times their diagonal
-  /// entry: to about 1 / hold of their change); the held system is factorised once for a given
-  /// step size and held set.
+  /// held, the held vertices keep to their targets: exactly with L-BFGS (left out of its
+  /// steps); with local-global by a penalty of hold times their diagonal entry (to about 1 /
+  /// hold of their change), the held system factorised once for a given step size and held set.
   /// False, with error set, when a factorisation or solve fails.
   bool solve(const ProjectiveStep& step, std::vector<Vec3>& positions, std::string& error,
              const HeldVertices* held = nullptr, Scalar hold = 0);
   /// Symbolic analyses run: one per distinct system (step sizes, held solves share one).
   int analyses() const;
+  /// Back-substitutions the last solve made (its iterations), and the step's objective at
+  /// its result.
+  int iterations_done() const { return iterations_done_; }
+  Scalar objective() const { return objective_; }
+  /// After a solve with contacts: each vertex's normal impulse from its held contacts (N s,
+  /// every vertex), and their work on the cloth at moving obstacles' velocities (J, normal
+  /// impulses and friction).
+  const std::vector<Scalar>& contact_impulses() const { return contact_impulse_; }
+  Scalar contact_work() const { return contact_work_; }
 
  private:
   using Block = Eigen::Matrix<Scalar, Eigen::Dynamic, 3>;
@@ -77,11 +113,42 @@ class ProjectiveSolver {
   };
   // The system of step size h, built and factorised on first use.
   System* system(Scalar h, std::string& error);
+  // The step's objective at x (every vertex), the local step's right-hand side into sums_,
+  // and when asked its gradient over the free vertices.
+  Scalar evaluate(const std::vector<Vec3>& x, Block* gradient);
+  // The held contacts' part of the objective at x, their gradient added to gradient when
+  // given; with impulses, each vertex's normal impulse into contact_impulse_ and the work into
+  // contact_work_.
+  Scalar contact_terms(const std::vector<Vec3>& x, std::vector<Vec3>* gradient, bool impulses);
+  // The step's iterations from positions (first guess in, result out): plain local-global
+  // with Chebyshev acceleration, or L-BFGS.
+  bool local_global(std::vector<Vec3>& positions, std::string& error);
+  bool quasi_newton(std::vector<Vec3>& positions, std::string& error);
+  // A held contact's weight in the objective, per kilogram of its vertex (the heaviest of its
+  // vertices): stiff against the vertex's inertia (a resting vertex yields g h^2 / 10 a step,
+  // within the margin), soft against its springs. The run's matrix knows a cloth's collective
+  // motions (a whole sheet pressed onto a plane) only by their masses; a weight of the springs'
+  // order there made L-BFGS's first steps thousands of times too long and its normal forces,
+  // hence friction, wrong.
+  static constexpr Scalar CONTACT_HOLD = 10;
+  static constexpr Scalar ARMIJO = 1e-4;            // sufficient decrease, a fraction of the slope
+  static constexpr int MAX_LINE_SEARCH_STEPS = 10;
+  // What the step being solved uses (set by solve for its iterations).
+  struct Current {
+    const System* system = nullptr;
+    const CholmodFactor* factor = nullptr;  // the system's, or the held system's
+    const ProjectiveStep* step = nullptr;
+    const HeldVertices* held = nullptr;
+  } step_;
   const Model& model_;
   std::vector<int> free_index_;
   int free_count_ = 0;
   int iterations_ = 0;
+  int history_ = 0;                    // L-BFGS memory, 0: local-global
   Scalar rho_ = 0;                     // Chebyshev's spectral radius estimate, 0: no acceleration
+  Scalar converged_move_ = 0;          // m: L-BFGS stops after a whole step that moved no vertex farther
+  int iterations_done_ = 0;
+  Scalar objective_ = 0;
   std::vector<Vec3> previous_, current_;  // the last two iterates
   std::vector<Vec3> best_;                // the iterate with the least objective so far
   std::map<Scalar, System> systems_;  // by step size: the scene's and its halvings
@@ -99,6 +166,26 @@ class ProjectiveSolver {
   std::vector<Vec3> spring_start_;      // per spring: x_i - x_j at the step's start
   std::vector<Vec3> spring_direction_;  // and its direction (any, for a spring of zero length)
   Block rhs_, solution_;
+  Block gradient_, trial_gradient_, direction_;  // L-BFGS, over the free vertices
+  std::vector<Vec3> gradient_rows_;
+  std::vector<char> fixed_;  // per free vertex: held at its target (L-BFGS leaves it out)
+  std::vector<Block> history_s_, history_t_;              // its steps and gradient changes (a ring)
+  Block step_s_, step_t_;                                 // the last step's pair, before it is kept
+  std::vector<Scalar> history_rho_;
+  std::vector<Vec3> trial_;                               // every vertex: the line search's point
+  std::vector<Scalar> contact_bound_, contact_stiffness_;  // per mesh contact: n . sum w x at least this; its weight
+  std::vector<Scalar> vertex_stiffness_;                   // per free vertex: the analytic obstacles' weight
+  std::vector<Scalar> contact_impulse_;                    // per vertex, N s
+  struct PosedShape {  // a sphere or plane at the step's end (as analytic_contact poses it)
+    const Obstacle* obstacle = nullptr;
+    bool sphere = false;
+    Vec3 point = Vec3::Zero();  // centre, or a point of the plane
+    Vec3 normal = Vec3::UnitZ();  // the plane's
+    Scalar radius = 0;
+  };
+  std::vector<PosedShape> shapes_;  // empty unless the step holds analytic contacts
+  std::vector<Scalar> kept_gap_;    // per shape and free vertex (shape-major): the gap the solve keeps
+  Scalar contact_work_ = 0;
 };
 
 }  // namespace drape

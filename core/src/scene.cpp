@@ -413,16 +413,21 @@ Scene parse_scene(const std::string& text, const std::filesystem::path& file) {
   if (n.has("friction")) s.friction = n.at("friction").non_negative();
   if (n.has("solver")) {
     const Node v = n.at("solver");
-    v.allow({"type", "tolerance", "max_iterations", "max_halvings", "iterations", "chebyshev"});
+    v.allow({"type", "tolerance", "max_iterations", "max_halvings", "iterations", "chebyshev", "history", "factor_reuse"});
     if (v.has("type")) {
       const std::string type = v.at("type").one_of({"cholmod", "cg", "projective"});
       s.solver.kind = type == "cg" ? SolverKind::ConjugateGradient
                       : type == "projective" ? SolverKind::Projective : SolverKind::Cholmod;
     }
-    if (v.has("tolerance")) s.solver.tolerance = v.at("tolerance").number_in(1e-16, 1, "from 1e-16 to 1");
+    s.solver.tolerance = default_tolerance(s.solver.kind);
+    if (v.has("tolerance"))
+      s.solver.tolerance = s.solver.kind == SolverKind::Projective ? v.at("tolerance").number_in(0, 1, "from 0 to 1")
+                                                                   : v.at("tolerance").number_in(1e-16, 1, "from 1e-16 to 1");
     if (v.has("max_iterations")) s.solver.max_iterations = v.at("max_iterations").integer_in(1, 100000000);
     if (v.has("max_halvings")) s.solver.max_halvings = v.at("max_halvings").integer_in(0, 10);
     if (v.has("iterations")) s.solver.iterations = v.at("iterations").integer_in(1, MAX_PROJECTIVE_ITERATIONS);
+    if (v.has("factor_reuse")) s.solver.factor_reuse = v.at("factor_reuse").integer_in(0, MAX_FACTOR_REUSE);
+    if (v.has("history")) s.solver.history = v.at("history").integer_in(0, MAX_PROJECTIVE_HISTORY);
     if (v.has("chebyshev")) s.solver.chebyshev = v.at("chebyshev").number_in(0, MAX_CHEBYSHEV_RHO, "from 0 to 0.9999");
   }
   if (n.has("collisions")) {

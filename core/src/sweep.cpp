@@ -26,7 +26,9 @@ std::string SweepSetting::label() const {
   std::ostringstream out;
   out << "steps=" << frame_steps << " solver=";
   if (solver.kind == SolverKind::Cholmod) out << "cholmod";
-  else if (solver.kind == SolverKind::Projective) out << "projective:" << solver.iterations << ":" << solver.chebyshev;
+  else if (solver.kind == SolverKind::Projective)
+    out << "projective:iterations=" << solver.iterations << ":history=" << solver.history
+        << ":tolerance=" << solver.tolerance << ":chebyshev=" << solver.chebyshev;
   else out << "cg:" << solver.tolerance;
   out << " ccd=" << ccd::method_name(method) << " thickness=" << thickness << " impulses=" << max_impulse_iterations
       << " zones=" << max_zone_iterations;
@@ -72,7 +74,9 @@ SolverSpec parse_solver_setting(const std::string& text, const SolverSpec& scene
     spec.kind = SolverKind::Cholmod;
     return spec;
   }
+  // A setting of another type than the scene's starts from that type's defaults.
   if (text == "cg" || text.rfind("cg:", 0) == 0) {
+    if (spec.kind != SolverKind::ConjugateGradient) spec.tolerance = CG_TOLERANCE;
     spec.kind = SolverKind::ConjugateGradient;
     if (text != "cg") {
       const auto tolerance = whole_number(text.substr(3));
@@ -83,27 +87,31 @@ SolverSpec parse_solver_setting(const std::string& text, const SolverSpec& scene
     return spec;
   }
   if (text == "projective" || text.rfind("projective:", 0) == 0) {
+    if (spec.kind != SolverKind::Projective) spec.tolerance = PROJECTIVE_TOLERANCE;
     spec.kind = SolverKind::Projective;
-    const std::string expected = "': expected projective:ITERATIONS or projective:ITERATIONS:CHEBYSHEV with iterations from 1 to " +
-                                 std::to_string(MAX_PROJECTIVE_ITERATIONS) + " and a Chebyshev estimate from 0 to 0.9999";
+    const std::string expected =
+        "': expected projective or projective:NAME=VALUE[:NAME=VALUE...] with iterations from 1 to " +
+        std::to_string(MAX_PROJECTIVE_ITERATIONS) + ", history from 0 to " + std::to_string(MAX_PROJECTIVE_HISTORY) +
+        ", tolerance from 0 to 1 and chebyshev from 0 to 0.9999 (for example projective:iterations=20:history=5)";
     std::stringstream fields(text.substr(std::string("projective").size()));
     std::string field;
     std::getline(fields, field, ':');  // empty: before the first colon
-    int index = 0;
+    const auto whole = [](double v, double low, double high) { return v >= low && v <= high && v == std::floor(v); };
     while (std::getline(fields, field, ':')) {
-      const auto value = whole_number(field);
-      if (index == 0 && value && *value >= 1 && *value <= MAX_PROJECTIVE_ITERATIONS && *value == std::floor(*value))
-        spec.iterations = int(*value);
-      else if (index == 1 && value && *value >= 0 && *value <= MAX_CHEBYSHEV_RHO)
-        spec.chebyshev = *value;
-      else
-        throw std::invalid_argument("'" + text + expected);
-      ++index;
+      const std::size_t equals = field.find('=');
+      const std::string name = field.substr(0, equals);
+      const auto value = equals == std::string::npos ? std::nullopt : whole_number(field.substr(equals + 1));
+      if (!value) throw std::invalid_argument("'" + text + expected);
+      if (name == "iterations" && whole(*value, 1, MAX_PROJECTIVE_ITERATIONS)) spec.iterations = int(*value);
+      else if (name == "history" && whole(*value, 0, MAX_PROJECTIVE_HISTORY)) spec.history = int(*value);
+      else if (name == "tolerance" && *value >= 0 && *value <= 1) spec.tolerance = *value;
+      else if (name == "chebyshev" && *value >= 0 && *value <= MAX_CHEBYSHEV_RHO) spec.chebyshev = *value;
+      else throw std::invalid_argument("'" + text + expected);
     }
     if (text.back() == ':') throw std::invalid_argument("'" + text + expected);
     return spec;
   }
-  throw std::invalid_argument("'" + text + "': expected cholmod, cg, cg:TOLERANCE, projective or projective:ITERATIONS[:CHEBYSHEV]");
+  throw std::invalid_argument("'" + text + "': expected cholmod, cg, cg:TOLERANCE, projective or projective:NAME=VALUE[:NAME=VALUE...] (iterations, history, tolerance, chebyshev)");
 }
 
 namespace {
@@ -224,8 +232,8 @@ std::filesystem::path run_folder(const SweepPlan& plan, std::size_t run) {
 nlohmann::json identity(const SweepPlan& plan, std::size_t run) {
   const SweepSetting& s = plan.setting(run);
   char exact[256];
-  std::snprintf(exact, sizeof exact, "%d %d %.17g %d %.17g %s %.17g %d %d", s.frame_steps, int(s.solver.kind),
-                double(s.solver.tolerance), s.solver.iterations, double(s.solver.chebyshev),
+  std::snprintf(exact, sizeof exact, "%d %d %.17g %d %d %.17g %s %.17g %d %d", s.frame_steps, int(s.solver.kind),
+                double(s.solver.tolerance), s.solver.iterations, s.solver.history, double(s.solver.chebyshev),
                 std::string(ccd::method_name(s.method)).c_str(), double(s.thickness), s.max_impulse_iterations,
                 s.max_zone_iterations);
   return {{"setting", s.label()}, {"exact", exact}, {"reference", run == 0}, {"frames", plan.frames},
@@ -331,7 +339,7 @@ void mark_pareto_front(std::vector<SweepResult>& results) {
 }
 
 std::string sweep_csv_header() {
-  return "reference,frame_steps,solver,cg_tolerance,projective_iterations,chebyshev,method,thickness,max_impulse_iterations,max_zone_iterations,frames_done,failed,"
+  return "reference,frame_steps,solver,tolerance,projective_iterations,projective_history,chebyshev,method,thickness,max_impulse_iterations,max_zone_iterations,frames_done,failed,"
          "wall_ms_per_frame,rms_error_m,max_error_m,energy_error_j,energy_drift_j,penetrations,pareto,failure";
 }
 
@@ -341,9 +349,10 @@ std::string sweep_csv_row(const SweepResult& r) {
   std::replace(failure.begin(), failure.end(), '"', '\'');
   char row[512];
   const bool cg = s.solver.kind == SolverKind::ConjugateGradient, projective = s.solver.kind == SolverKind::Projective;
-  std::snprintf(row, sizeof row, "%d,%d,%s,%.3g,%d,%.6g,%s,%.6g,%d,%d,%d,%d,%.3f,%.6e,%.6e,%.6e,%.6e,%ld,%d,", int(r.reference),
-                s.frame_steps, cg ? "cg" : projective ? "projective" : "cholmod", cg ? double(s.solver.tolerance) : 0.0,
-                projective ? s.solver.iterations : 0, projective ? double(s.solver.chebyshev) : 0.0,
+  std::snprintf(row, sizeof row, "%d,%d,%s,%.3g,%d,%d,%.6g,%s,%.6g,%d,%d,%d,%d,%.3f,%.6e,%.6e,%.6e,%.6e,%ld,%d,", int(r.reference),
+                s.frame_steps, cg ? "cg" : projective ? "projective" : "cholmod",
+                cg || projective ? double(s.solver.tolerance) : 0.0, projective ? s.solver.iterations : 0,
+                projective ? s.solver.history : 0, projective && s.solver.history == 0 ? double(s.solver.chebyshev) : 0.0,
                 std::string(ccd::method_name(s.method)).c_str(), double(s.thickness), s.max_impulse_iterations,
                 s.max_zone_iterations, r.frames_done, int(r.failed), r.wall_ms_per_frame, r.rms_error, r.max_error, r.energy_error,
                 r.energy_drift, r.penetrations, int(r.pareto));

@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 
 #include "drape/core/integrator.h"
+#include "projective.h"
 
 using namespace drape;
 
@@ -40,7 +41,7 @@ TEST(Projective, FreeFallIsBackwardEulerExactly) {
   // after n steps of h, v = n h g and z = h^2 g n (n + 1) / 2, as backward Euler gives (to
   // rounding: v is a difference of positions over h).
   const Model model = model_of(R"({"frame_time": 0.01, "frame_steps": 2, "cloths": [{"grid": {"resolution": [6, 6]},
-    "material": {"air_damping": 0}}], "solver": {"type": "projective", "iterations": 3, "chebyshev": 0}})");
+    "material": {"air_damping": 0}}], "solver": {"type": "projective", "iterations": 3, "history": 0, "tolerance": 1e-12, "chebyshev": 0}})");
   const int n = 40;
   const State state = run(model, n);
   const Scalar h = model.scene.timestep(), g = model.scene.gravity.z();
@@ -53,16 +54,67 @@ TEST(Projective, FreeFallIsBackwardEulerExactly) {
 
 TEST(Projective, MoreIterationsComeCloserToTheLinearisedReference) {
   // Converged, the projective solver is backward Euler itself, the reference its linearisation
-  // (their difference shrinks with the step); a few iterations leave the springs soft.
+  // (their difference shrinks with the step); a few iterations leave the springs soft. Plain
+  // local-global iterations (history 0), with and without Chebyshev acceleration.
   const State reference = run(hanging(R"({"type": "cholmod"})"), 25);
-  const Scalar few = largest_distance(reference, run(hanging(R"({"type": "projective", "iterations": 3, "chebyshev": 0})"), 25));
+  const Scalar few = largest_distance(reference, run(hanging(R"({"type": "projective", "iterations": 3, "history": 0, "tolerance": 1e-12, "chebyshev": 0})"), 25));
   const Scalar many =
-      largest_distance(reference, run(hanging(R"({"type": "projective", "iterations": 300, "chebyshev": 0})"), 25));
-  const Scalar plain = largest_distance(reference, run(hanging(R"({"type": "projective", "iterations": 10, "chebyshev": 0})"), 25));
+      largest_distance(reference, run(hanging(R"({"type": "projective", "iterations": 300, "history": 0, "tolerance": 1e-12, "chebyshev": 0})"), 25));
+  const Scalar plain = largest_distance(reference, run(hanging(R"({"type": "projective", "iterations": 10, "history": 0, "tolerance": 1e-12, "chebyshev": 0})"), 25));
   const Scalar accelerated =
-      largest_distance(reference, run(hanging(R"({"type": "projective", "iterations": 10, "chebyshev": 0.9})"), 25));
+      largest_distance(reference, run(hanging(R"({"type": "projective", "iterations": 10, "history": 0, "tolerance": 1e-12, "chebyshev": 0.9})"), 25));
   EXPECT_LT(many, 0.2 * few) << few << " m with 3 iterations, " << many << " m with 300";
   EXPECT_LT(accelerated, plain) << "10 iterations: " << plain << " m plain, " << accelerated << " m accelerated";
+}
+
+// The step's objective (the backward Euler energy projective.h minimises) after one step of
+// the hanging cloth with the given solver section, from the state five reference steps give.
+std::pair<Scalar, int> objective_after_one_step(const std::string& solver) {
+  const Model model = hanging(solver);
+  const State start = run(hanging(R"({"type": "cholmod"})"), 5);
+  std::vector<int> free_index(model.vertex_count(), -1);
+  int free_count = 0;
+  for (std::size_t v = 0; v < model.vertex_count(); ++v)
+    if (model.pin_of_vertex[v] < 0) free_index[v] = free_count++;
+  ProjectiveSolver solver_of(model, free_index, free_count);
+  const Scalar h = model.scene.timestep();
+  std::vector<Vec3> forces(model.vertex_count()), positions(model.vertex_count());
+  for (std::size_t v = 0; v < model.vertex_count(); ++v) {
+    forces[v] = model.masses[v] * model.scene.gravity;
+    positions[v] = start.positions[v] + h * start.velocities[v] + (free_index[v] >= 0 ? Vec3(h * h * model.scene.gravity) : Vec3::Zero());
+  }
+  std::string error;
+  EXPECT_TRUE(solver_of.solve({h, &start.positions, &start.velocities, &forces}, positions, error)) << error;
+  return {solver_of.objective(), solver_of.iterations_done()};
+}
+
+TEST(Projective, QuasiNewtonConvergesFasterThanLocalGlobal) {
+  // The same step's objective after 10, 20 and 40 iterations: L-BFGS (the default, history 5)
+  // below local-global, plain or Chebyshev-accelerated (which need not beat plain). The stiff
+  // springs of this cloth (h^2 k / m about 1e6) converge slowly in all three (docs/solvers.md).
+  for (int iterations : {10, 20, 40}) {
+    const std::string count = std::to_string(iterations);
+    const Scalar quasi_newton = objective_after_one_step(R"({"type": "projective", "tolerance": 1e-12, "iterations": )" + count + "}").first;
+    const Scalar accelerated = objective_after_one_step(
+        R"({"type": "projective", "history": 0, "tolerance": 1e-12, "iterations": )" + count + "}").first;
+    const Scalar plain = objective_after_one_step(
+        R"({"type": "projective", "history": 0, "tolerance": 1e-12, "chebyshev": 0, "iterations": )" + count + "}").first;
+    EXPECT_LT(quasi_newton, accelerated) << iterations << " iterations";
+    EXPECT_LT(quasi_newton, plain) << iterations << " iterations";
+  }
+}
+
+TEST(Projective, ATolerenceStopsTheIterationsEarly) {
+  // The share of an edge that an iteration must move some vertex by to go on: looser, fewer
+  // iterations and a higher objective; the count the solver reports is what it did.
+  const auto [loose, loose_count] = objective_after_one_step(R"({"type": "projective", "iterations": 500, "tolerance": 1e-2})");
+  const auto [tight, tight_count] = objective_after_one_step(R"({"type": "projective", "iterations": 500, "tolerance": 1e-5})");
+  EXPECT_LT(loose_count, tight_count);
+  EXPECT_LT(tight_count, 500);
+  EXPECT_LT(tight, loose);
+  const auto [capped, capped_count] = objective_after_one_step(R"({"type": "projective", "iterations": 3, "tolerance": 1e-5})");
+  EXPECT_EQ(capped_count, 3);
+  EXPECT_GT(capped, tight);
 }
 
 TEST(Projective, OneFactorisationServesTheWholeRun) {
@@ -101,7 +153,7 @@ TEST(Projective, EnergyStaysBelowItsStartWithoutInputWhenConverged) {
   // Converged, it is backward Euler, which dissipates. (With its default 10 iterations the
   // stiff springs of this cloth stay stretched and the energy rises above the start: the
   // solver's open problem, docs/solvers.md.)
-  const Model model = hanging(R"({"type": "projective", "iterations": 300, "max_halvings": 0})");
+  const Model model = hanging(R"({"type": "projective", "iterations": 300, "tolerance": 1e-12, "max_halvings": 0})");
   State state = initial_state(model);
   Integrator integrator(model);
   const Scalar start = kinetic_energy(model, state) + potential_energy(model, state);
@@ -115,19 +167,20 @@ TEST(Projective, AClothLandingOnASphereStaysOutsideItAndAtRest) {
   const Model model = model_of(R"({"frame_time": 0.04, "frame_steps": 8, "frames": 30,
     "cloths": [{"grid": {"size": [1, 1], "resolution": [16, 16]}, "transform": {"translate": [0, 0, 1.1]}}],
     "obstacles": [{"sphere": {"center": [0, 0, 0.5], "radius": 0.5}}, {"plane": {"point": [0, 0, 0], "normal": [0, 0, 1]}}],
-    "solver": {"type": "projective", "iterations": 100}})");
+    "solver": {"type": "projective"}})");
   State state = initial_state(model);
   Integrator integrator(model);
   const Scalar start = kinetic_energy(model, state) + potential_energy(model, state);
-  int contacts = 0;
   for (int k = 0; k < 8 * 30; ++k) {
     const StepReport r = integrator.step(state);
     ASSERT_TRUE(r.ok) << r.failure;
-    contacts += r.obstacle_contacts;
     EXPECT_LE(kinetic_energy(model, state) + potential_energy(model, state), start) << "step " << k;
     for (const Vec3& x : state.positions) EXPECT_GE((x - Vec3(0, 0, 0.5)).norm(), 0.5 + 0.005 - 1e-9);
   }
-  EXPECT_GT(contacts, 0);
+  // It rests on the sphere: the top vertex within the held gap (1.05 thicknesses) plus a tenth.
+  Scalar closest = 1;
+  for (const Vec3& x : state.positions) closest = std::min(closest, (x - Vec3(0, 0, 0.5)).norm() - 0.5);
+  EXPECT_LT(closest, 0.005 * 1.15);
   EXPECT_LT(kinetic_energy(model, state), 1e-3);
   EXPECT_LT(max_stretch(model, state), 1.05);
 }

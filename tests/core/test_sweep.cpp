@@ -37,7 +37,7 @@ TEST(Sweep, GridIsTheProductOfTheKnobs) {
   const auto settings = grid.settings();
   EXPECT_EQ(settings.size(), 3u * 3 * 2 * 1 * 2 * 1);
   EXPECT_EQ(settings.front().label(), "steps=5 solver=cholmod ccd=vincent thickness=0.005 impulses=4 zones=16");
-  EXPECT_EQ(settings.back().label(), "steps=20 solver=projective:10:0.99 ccd=conservative thickness=0.005 impulses=8 zones=16");
+  EXPECT_EQ(settings.back().label(), "steps=20 solver=projective:iterations=10:history=5:tolerance=1e-08:chebyshev=0.99 ccd=conservative thickness=0.005 impulses=8 zones=16");
 }
 
 TEST(Sweep, SolverSettings) {
@@ -48,16 +48,23 @@ TEST(Sweep, SolverSettings) {
   EXPECT_EQ(cg.tolerance, 1e-8);
   EXPECT_EQ(cg.max_iterations, 500);
   EXPECT_EQ(parse_solver_setting("cg:1e-3", scene).tolerance, 1e-3);
-  const SolverSpec projective = parse_solver_setting("projective:20:0.95", scene);
+  const SolverSpec projective = parse_solver_setting("projective:iterations=20:chebyshev=0.95:history=0", scene);
   EXPECT_EQ(projective.kind, SolverKind::Projective);
   EXPECT_EQ(projective.iterations, 20);
   EXPECT_EQ(projective.chebyshev, 0.95);
-  EXPECT_EQ(parse_solver_setting("projective:5", scene).iterations, 5);
-  EXPECT_EQ(parse_solver_setting("projective:5", scene).chebyshev, scene.chebyshev);
+  EXPECT_EQ(projective.history, 0);
+  const SolverSpec quasi_newton = parse_solver_setting("projective:tolerance=1e-3:history=8", scene);
+  EXPECT_EQ(quasi_newton.tolerance, 1e-3);
+  EXPECT_EQ(quasi_newton.history, 8);
+  EXPECT_EQ(quasi_newton.iterations, scene.iterations);
+  EXPECT_EQ(parse_solver_setting("projective:iterations=5", scene).iterations, 5);
+  EXPECT_EQ(parse_solver_setting("projective:iterations=5", scene).chebyshev, scene.chebyshev);
   EXPECT_EQ(parse_solver_setting("projective", scene).iterations, scene.iterations);
   for (const char* bad : {"lu", "cg:", "cg:abc", "cg:0", "cg:2", "cg:1e-3x", "cholmod:1", "projective:", "projective:0",
-                          "projective:2.5", "projective:10:1", "projective:10:-0.1", "projective:10:0.9:1",
-                          "projective:10:", "projectivex"}) {
+                          "projective:10", "projective:10:0.9", "projective:iterations=0", "projective:iterations=2.5",
+                          "projective:chebyshev=1", "projective:chebyshev=-0.1", "projective:history=101",
+                          "projective:tolerance=2", "projective:iterations=", "projective:speed=3",
+                          "projective:iterations=10:", "projectivex"}) {
     try {
       parse_solver_setting(bad, scene);
       ADD_FAILURE() << bad << " accepted";

@@ -71,6 +71,7 @@ struct SolveContact {
   Vec3 normal = Vec3::UnitZ();
   Scalar target = 0;
   Vec3 surface_velocity = Vec3::Zero();  ///< the obstacle's at the contact, for friction
+  bool analytic = false;                 ///< with a sphere or plane (else a mesh obstacle)
 };
 
 class CollisionPipeline {

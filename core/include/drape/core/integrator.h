@@ -61,6 +61,7 @@ Scalar energy_scale(const Model& model);
 
 class ProjectiveSolver;
 struct HeldVertices;
+struct ProjectiveContacts;
 
 /// Holds what a run reuses from step to step: for the linearised solve, the system's sparsity
 /// pattern with each spring's place in it and the linear solver (whose symbolic analysis
@@ -79,6 +80,8 @@ class Integrator {
   StepReport step(State& state);
   /// Symbolic analyses of the solver's sparse factorisations so far (0 for cg).
   int analyses() const;
+  /// Numeric factorisations of the linearised solver's matrices so far (0 for cg and projective).
+  int factorisations() const;
   /// The collision pipeline, or nullptr when the scene needs none.
   CollisionPipeline* collisions() { return collisions_.get(); }
 
@@ -116,7 +119,8 @@ class Integrator {
   // end of the step out), with held vertices when given; timed into report, which says why
   // (failure, then the reason) when they fail.
   bool iterate_projective(const std::vector<Vec3>& start, std::vector<Vec3>& positions, StepReport& report,
-                          const std::string& failure, const HeldVertices* held = nullptr);
+                          const std::string& failure, const HeldVertices* held = nullptr,
+                          const ProjectiveContacts* contacts = nullptr);
   // spread_response's counterpart for the projective solver: the step solved again with the
   // contact vertices held to their new end positions (the motion), then to where their new
   // velocities would take them (the velocities); start is the step's start.

@@ -2,7 +2,8 @@
 /// \file
 /// The sparse solve of the implicit step, behind one interface: SuiteSparse CHOLMOD (a sparse
 /// Cholesky factorisation whose symbolic analysis is reused while the matrix's pattern stays
-/// the same) or Eigen's conjugate gradient with a Jacobi preconditioner.
+/// the same, and whose numeric factorisation preconditions a conjugate gradient on later
+/// matrices until that stops paying) or Eigen's conjugate gradient with a Jacobi preconditioner.
 
 #include <Eigen/SparseCore>
 #include <memory>
@@ -30,10 +31,14 @@ class LinearSolver {
   /// starting guess on entry (used by iterative solvers).
   virtual SolveReport solve(const SparseMatrix& A, const VectorX& b, VectorX& x) = 0;
   /// Solves with the matrix of the last solve() again, for another right-hand side (a direct
-  /// solver reuses its factorisation).
+  /// solver reuses its factorisation). That matrix must still be alive and unchanged: CHOLMOD
+  /// may have solved it by a conjugate gradient preconditioned by an older factorisation, and
+  /// does so again with it.
   virtual SolveReport solve_again(const VectorX& b, VectorX& x) = 0;
   /// How many times the symbolic analysis ran (direct solvers); 0 for iterative ones.
   virtual int analyses() const { return 0; }
+  /// How many numeric factorisations ran (direct solvers); 0 for iterative ones.
+  virtual int factorisations() const { return 0; }
 };
 
 std::unique_ptr<LinearSolver> make_linear_solver(const SolverSpec& spec);
@@ -57,8 +62,9 @@ class CholmodFactor {
   bool solve(const Eigen::Matrix<Scalar, Eigen::Dynamic, 3>& B, Eigen::Matrix<Scalar, Eigen::Dynamic, 3>& X) const;
   /// X = A^-1 b.
   bool solve(const VectorX& b, VectorX& x) const;
-  /// How many times the symbolic analysis ran.
+  /// How many times the symbolic analysis ran, and the numeric factorisation.
   int analyses() const;
+  int factorisations() const;
 
  private:
   struct Impl;

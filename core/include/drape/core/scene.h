@@ -39,6 +39,8 @@ inline constexpr Scalar MAX_ACCELERATION = 1e4;   ///< m/s^2: gravity
 inline constexpr Scalar MAX_THICKNESS = 1;        ///< m: collisions.thickness (see also the cloth-size rule in build_model)
 inline constexpr int MAX_PROJECTIVE_ITERATIONS = 1000;  ///< solver.iterations
 inline constexpr Scalar MAX_CHEBYSHEV_RHO = 0.9999;     ///< solver.chebyshev
+inline constexpr int MAX_PROJECTIVE_HISTORY = 100;        ///< solver.history
+inline constexpr int MAX_FACTOR_REUSE = 1000;             ///< solver.factor_reuse
 inline constexpr Scalar MAX_THICKNESS_OF_CLOTH = 0.25;  ///< collisions.thickness at most this times each cloth's diagonal
 inline constexpr Scalar MIN_FRAME_TIME = 1e-6;    ///< s
 inline constexpr Scalar MAX_FRAME_TIME = 60;      ///< s
@@ -133,21 +135,43 @@ struct WindSpec {
 /// for mass-spring systems (projective dynamics), one factorisation for the run.
 enum class SolverKind { Cholmod, ConjugateGradient, Projective };
 
+/// solver.tolerance's default for a solver type: cg's relative residual, or the projective
+/// solver's share of an edge (SolverSpec::tolerance; 0: every one of its iterations).
+inline constexpr Scalar CG_TOLERANCE = 1e-8;
+inline constexpr Scalar PROJECTIVE_TOLERANCE = 0;
+
 struct SolverSpec {
   SolverKind kind = SolverKind::Cholmod;
-  Scalar tolerance = 1e-8;  ///< cg: relative residual at which it stops
+  /// cg: relative residual at which it stops; projective: it stops before `iterations` after
+  /// an iteration that moved no vertex by more than this times the mean edge length. Its
+  /// default depends on the type (CG_TOLERANCE, PROJECTIVE_TOLERANCE).
+  Scalar tolerance = CG_TOLERANCE;
   int max_iterations = 2000;  ///< cg: iteration cap
+  /// cholmod: conjugate gradient iterations, preconditioned by the last factorisation, that a
+  /// solve may take (until its preconditioned residual norm is 1e-10 of the right-hand
+  /// side's: the error in the matrix's norm) before its own matrix is factorised; 0 factorises
+  /// every solve.
+  int factor_reuse = 8;
   /// A step that makes energy (beyond a tolerance) is taken again in 2, 4, ... parts, at most
   /// 2^max_halvings (Integrator::step); 0 takes every step as it comes.
   int max_halvings = 3;
-  /// projective: local-global iterations a step (each one pass over the springs and one solve
-  /// with the run's factorisation).
+  /// projective: iterations a step, each one back-substitution with the run's factorisation
+  /// and one pass over the springs (more when L-BFGS shortens its step).
   int iterations = 10;
-  /// projective: the iteration's spectral radius estimate for Chebyshev acceleration (Wang
-  /// 2015), from 0 (none) to below 1; an accelerated iteration that raises the step's
-  /// objective is undone and the acceleration restarts.
+  /// projective with history 0: the iteration's spectral radius estimate for Chebyshev
+  /// acceleration (Wang 2015), from 0 (none) to below 1; an accelerated iteration that raises
+  /// the step's objective is undone and the acceleration restarts.
   Scalar chebyshev = 0.99;
+  /// projective: the quasi-Newton memory (L-BFGS with the run's factorisation as its first
+  /// inverse Hessian, Liu, Bouaziz and Kavan 2017); 0: plain local-global iterations, with
+  /// `chebyshev`.
+  int history = 5;
 };
+
+/// The default tolerance of a solver type (0 for cholmod, which has none).
+inline Scalar default_tolerance(SolverKind kind) {
+  return kind == SolverKind::Projective ? PROJECTIVE_TOLERANCE : CG_TOLERANCE;
+}
 
 struct CollisionSpec {
   bool self = false;
