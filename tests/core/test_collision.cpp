@@ -1,0 +1,188 @@
+// The collision response itself (core/src/collision.cpp), one resolve of a step at a time:
+// impulses that keep momentum, act along the contact normal and stop the approach at the
+// thickness, Coulomb's bound on friction, impact zones that keep linear and angular momentum,
+// the fail-safe, and kinematic (pinned) vertices never moved.
+#include <gtest/gtest.h>
+
+#include <sstream>
+
+#include "drape/core/collision.h"
+#include "drape/core/penetration.h"
+
+using namespace drape;
+
+namespace {
+
+// Two square cloths of 2 x 2 quads, 20 cm wide, one above the other (a gap of 2 cm, 5 mm
+// thickness), cloth against cloth on; the lower one pinned when asked.
+Model two_sheets(Scalar friction, bool pin_lower) {
+  std::ostringstream json;
+  json << R"({"frame_time": 0.05, "frame_steps": 1, "friction": )" << friction << R"(,
+    "cloths": [{"grid": {"size": [0.2, 0.2], "resolution": [2, 2]}},
+               {"grid": {"size": [0.2, 0.2], "resolution": [2, 2]}, "transform": {"translate": [0.013, 0.007, 0.02]}}],
+    )" << (pin_lower ? R"("handles": [{"cloth": 0, "corners": ["top-left", "top-right", "bottom-left", "bottom-right"]}],)" : "")
+       << R"("collisions": {"self": true, "thickness": 0.005}})";
+  return build_model(parse_scene(json.str(), "inline.json"));
+}
+
+// A 1.5 cm square cloth (two triangles), turned 30 degrees, 2 cm above the inside of one
+// triangle of a 20 cm sheet pinned whole (3 mm thickness): every contact of a fall is one of
+// its vertices with that flat triangle, along z.
+Model square_over_pinned_sheet(Scalar friction) {
+  std::ostringstream json;
+  json << R"({"frame_time": 0.05, "frame_steps": 1, "friction": )" << friction << R"(,
+    "cloths": [{"grid": {"size": [0.2, 0.2], "resolution": [2, 2]}},
+               {"grid": {"size": [0.015, 0.015], "resolution": [1, 1]},
+                "transform": {"rotate": [30, 0, 0, 1], "translate": [0.05, 0.018, 0.02]}}],
+    "handles": [{"cloth": 0, "box": {"min": [-1, -1, -0.001], "max": [1, 1, 0.001]}}],
+    "collisions": {"self": true, "thickness": 0.003}})";
+  return build_model(parse_scene(json.str(), "inline.json"));
+}
+
+// The upper cloth (the second) falling through the lower one within the step: its vertices
+// move by `upper` over the step, the lower one's by `lower`.
+std::vector<Vec3> motions(const Model& model, const Vec3& upper, const Vec3& lower = Vec3::Zero()) {
+  std::vector<Vec3> motion(model.vertex_count());
+  const ClothRange& second = model.cloths[1];
+  for (std::size_t v = 0; v < motion.size(); ++v)
+    motion[v] = int(v) >= second.first_vertex ? upper : model.pin_of_vertex[v] >= 0 ? Vec3::Zero() : lower;
+  return motion;
+}
+
+Vec3 momentum(const Model& model, const std::vector<Vec3>& motion, int first = 0, int end = -1) {
+  if (end < 0) end = int(motion.size());
+  Vec3 p = Vec3::Zero();
+  for (int v = first; v < end; ++v) p += model.masses[std::size_t(v)] * motion[std::size_t(v)];
+  return p;
+}
+
+Vec3 angular_momentum(const Model& model, const std::vector<Vec3>& start, const std::vector<Vec3>& motion) {
+  Vec3 l = Vec3::Zero();
+  for (std::size_t v = 0; v < motion.size(); ++v) l += model.masses[v] * start[v].cross(motion[v]);
+  return l;
+}
+
+// Whether another resolve of the step finds anything to do (a collision or a proximity).
+bool collision_free(const Model& model, const std::vector<Vec3>& start, Scalar h, const std::vector<Vec3>& motion) {
+  CollisionPipeline again(model, CollisionSettings{});
+  std::vector<Vec3> copy = motion;
+  const CollisionCounters c = again.resolve(start, 0, h, copy);
+  std::vector<Vec3> end(start.size());
+  for (std::size_t v = 0; v < start.size(); ++v) end[v] = start[v] + h * motion[v];
+  return c.ccd_hits == 0 && find_penetrations(model, end, h).empty();
+}
+
+}  // namespace
+
+TEST(Collision, ImpulsesKeepMomentumAndStopTheApproach) {
+  // Two free sheets: the upper one falls 10 cm in the step, through the lower one, sliding;
+  // frictionless. The impulses are internal: the momentum of both sheets is kept, the upper
+  // one gives downward momentum to the lower one, and the step ends free of collisions.
+  const Model model = two_sheets(0, false);
+  const Scalar h = model.scene.timestep();
+  const std::vector<Vec3>& start = model.initial_positions;
+  std::vector<Vec3> motion = motions(model, Vec3(0.3, -0.1, -2.0));
+  const std::vector<Vec3> before = motion;
+  CollisionPipeline pipeline(model, CollisionSettings{});
+  const CollisionCounters c = pipeline.resolve(start, 0, h, motion);
+  EXPECT_GT(c.ccd_hits, 0);
+  EXPECT_EQ(c.fail_safes, 0);
+  EXPECT_LT((momentum(model, motion) - momentum(model, before)).norm(), 1e-12);
+  const int second = model.cloths[1].first_vertex;
+  EXPECT_GT(momentum(model, motion, second).z(), momentum(model, before, second).z());
+  EXPECT_LT(momentum(model, motion, 0, second).z(), 0);
+  EXPECT_TRUE(collision_free(model, start, h, motion));
+}
+
+TEST(Collision, AnImpulseActsAlongItsNormalAndLeavesTheSeparationSpeed) {
+  // The square falls onto the pinned sheet's flat triangle: every change is along z, the
+  // sheet does not move, and the square's normal speed becomes the separation speed.
+  const Model model = square_over_pinned_sheet(0);
+  const Scalar h = model.scene.timestep();
+  std::vector<Vec3> motion = motions(model, Vec3(0.1, 0.05, -2.0));
+  const std::vector<Vec3> before = motion;
+  CollisionPipeline pipeline(model, CollisionSettings{});
+  const CollisionCounters c = pipeline.resolve(model.initial_positions, 0, h, motion);
+  EXPECT_GT(c.ccd_hits, 0);
+  for (std::size_t v = 0; v < motion.size(); ++v) {
+    if (model.pin_of_vertex[v] >= 0) {
+      EXPECT_EQ(motion[v], Vec3::Zero()) << v;
+      continue;
+    }
+    EXPECT_NEAR(motion[v].x(), before[v].x(), 1e-12) << v;
+    EXPECT_NEAR(motion[v].y(), before[v].y(), 1e-12) << v;
+    // Inelastic, with the separation speed CollisionSettings asks for: the step's fall is
+    // replaced by a rise of a tenth of the thickness, enough that the next round does not
+    // find the same contact again.
+    EXPECT_NEAR(motion[v].z(), CollisionSettings{}.separation_fraction * 0.003 / h, 1e-12) << v;
+  }
+  EXPECT_TRUE(collision_free(model, model.initial_positions, h, motion));
+}
+
+TEST(Collision, FrictionStaysWithinCoulombsBoundAndNeverReversesTheSlip) {
+  // The square slides across the pinned sheet while falling onto it: each vertex's tangential
+  // change is at most the friction coefficient times its normal change (every contact's
+  // normal is z), it acts at that bound while the vertex slides, and the slide never reverses
+  // (at friction 5 it stops).
+  for (Scalar mu : {0.01, 0.05, 5.0}) {
+    const Model model = square_over_pinned_sheet(mu);
+    const Scalar h = model.scene.timestep();
+    const Vec3 incoming(0.1, 0.05, -2.0);
+    std::vector<Vec3> motion = motions(model, incoming);
+    const std::vector<Vec3> before = motion;
+    CollisionPipeline pipeline(model, CollisionSettings{});
+    pipeline.resolve(model.initial_positions, 0, h, motion);
+    for (int v = model.cloths[1].first_vertex; v < int(motion.size()); ++v) {
+      const Vec3 change = motion[std::size_t(v)] - before[std::size_t(v)];
+      const Scalar normal = change.z(), tangential = Vec3(change.x(), change.y(), 0).norm();
+      const Vec3 slide(motion[std::size_t(v)].x(), motion[std::size_t(v)].y(), 0);
+      EXPECT_GT(normal, 0) << mu << ", vertex " << v;
+      EXPECT_LE(tangential, mu * normal * (1 + 1e-9)) << mu << ", vertex " << v;
+      EXPECT_GE(slide.dot(Vec3(incoming.x(), incoming.y(), 0)), -1e-12) << mu << ", vertex " << v;
+      if (mu < 0.1) EXPECT_NEAR(tangential, mu * normal, 1e-9 * normal) << mu << ", vertex " << v;
+      else EXPECT_LT(slide.norm(), 1e-9) << mu << ", vertex " << v;
+    }
+  }
+}
+
+TEST(Collision, ImpactZonesKeepMomentumAndAngularMomentum) {
+  // No impulse rounds: the collisions go straight to rigid impact zones. The upper sheet
+  // falls through the lower, free one while turning; each zone keeps its momentum and
+  // angular momentum, so the pair does.
+  const Model model = two_sheets(0, false);
+  const Scalar h = model.scene.timestep();
+  const std::vector<Vec3>& start = model.initial_positions;
+  std::vector<Vec3> motion(model.vertex_count());
+  const int second = model.cloths[1].first_vertex;
+  const Vec3 centre(0.013, 0.007, 0.02), spin(0, 0, 3.0);
+  for (std::size_t v = 0; v < motion.size(); ++v)
+    motion[v] = int(v) >= second ? Vec3(Vec3(0, 0, -2.0) + spin.cross(start[v] - centre)) : Vec3(0, 0, 0.5);
+  const std::vector<Vec3> before = motion;
+  CollisionSettings settings;
+  settings.max_impulse_iterations = 0;
+  CollisionPipeline pipeline(model, settings);
+  const CollisionCounters c = pipeline.resolve(start, 0, h, motion);
+  EXPECT_GT(c.impact_zones, 0);
+  EXPECT_EQ(c.fail_safes, 0);
+  EXPECT_LT((momentum(model, motion) - momentum(model, before)).norm(), 1e-12);
+  EXPECT_LT((angular_momentum(model, start, motion) - angular_momentum(model, start, before)).norm(), 1e-12);
+  EXPECT_TRUE(collision_free(model, start, h, motion));
+}
+
+TEST(Collision, TheFailSafeStopsWhatNothingElseResolved) {
+  // No impulse and no impact-zone rounds: the fail-safe keeps the colliding vertices at their
+  // start (and, if that is not enough, every cloth vertex), and the step is then free.
+  const Model model = two_sheets(0, false);
+  const Scalar h = model.scene.timestep();
+  std::vector<Vec3> motion = motions(model, Vec3(0, 0, -2.0), Vec3(0, 0, 0.5));
+  CollisionSettings settings;
+  settings.max_impulse_iterations = 0;
+  settings.max_zone_iterations = 0;
+  CollisionPipeline pipeline(model, settings);
+  const CollisionCounters c = pipeline.resolve(model.initial_positions, 0, h, motion);
+  EXPECT_EQ(c.fail_safes, 1);
+  int stopped = 0;
+  for (const Vec3& m : motion) stopped += m == Vec3::Zero();
+  EXPECT_GT(stopped, 0);
+  EXPECT_TRUE(collision_free(model, model.initial_positions, h, motion));
+}
