@@ -14,33 +14,90 @@
 #include "drape/core/output_file.h"
 #include "drape/core/obstacle.h"
 #include "drape/core/penetration.h"
+#include "drape/core/stats_columns.h"
 
 namespace drape {
 
+namespace {
+
+// A cell's text: an integer, a number to the last bit, a time in ms to the microsecond, or an
+// optional value (empty when absent).
+std::string integer(long long v) { return std::to_string(v); }
+std::string exact(double v) {
+  char text[32];
+  std::snprintf(text, sizeof text, "%.17g", v);
+  return text;
+}
+std::string milliseconds(double v) {
+  char text[32];
+  std::snprintf(text, sizeof text, "%.3f", v);
+  return text;
+}
+
+constexpr ColumnTolerance TIMING{0, 0, true};
+constexpr ColumnTolerance EXACT{0, 0};
+constexpr ColumnTolerance COUNT{2, 0.05};  // counts of work that rounding can tip: iterations, contacts
+
+}  // namespace
+
+const std::vector<StatsColumn>& stats_columns() {
+  using S = const FrameStats&;
+  static const std::vector<StatsColumn> columns = {
+      {"frame", [](S s) { return integer(s.frame); }, EXACT},
+      {"sim_time", [](S s) { return exact(s.sim_time); }, {1e-12, 1e-12}},
+      {"wall_ms", [](S s) { return milliseconds(s.wall_ms); }, TIMING},
+      {"solve_ms", [](S s) { return milliseconds(s.solve_ms); }, TIMING},
+      {"solver_iterations", [](S s) { return integer(s.solver_iterations); }, COUNT},
+      {"kinetic_energy", [](S s) { return exact(s.kinetic_energy); }},
+      {"potential_energy", [](S s) { return exact(s.potential_energy); }},
+      {"max_stretch", [](S s) { return exact(s.max_stretch); }},
+      {"min_distance_obstacle", [](S s) { return s.min_distance_obstacle ? exact(*s.min_distance_obstacle) : std::string(); },
+       {1e-7, 1e-6}},
+      {"obstacle_contacts", [](S s) { return integer(s.obstacle_contacts); }, COUNT},
+      {"solver_warnings", [](S s) { return integer(s.solver_warnings); }, EXACT},
+      {"bvh_pairs", [](S s) { return integer(s.collisions.bvh_pairs); }},
+      {"vf_tests", [](S s) { return integer(s.collisions.vf_tests); }},
+      {"ee_tests", [](S s) { return integer(s.collisions.ee_tests); }},
+      {"culled", [](S s) { return integer((long long)s.collisions.tests.culled); }},
+      {"separated", [](S s) { return integer((long long)s.collisions.tests.separated); }},
+      {"root_solves", [](S s) { return integer((long long)s.collisions.tests.root_solves); }},
+      {"ccd_hits", [](S s) { return integer(s.collisions.ccd_hits); }},
+      {"impulse_iterations", [](S s) { return integer(s.collisions.impulse_iterations); }},
+      {"impact_zones", [](S s) { return integer(s.collisions.impact_zones); }},
+      {"proximity_impulses", [](S s) { return integer(s.collisions.proximity_impulses); }},
+      {"rest_clamped_pairs", [](S s) { return integer(s.collisions.rest_clamped_pairs); }},
+      {"fail_safes", [](S s) { return integer(s.collisions.fail_safes); }, EXACT},
+      {"ccd_ms", [](S s) { return milliseconds(s.collisions.ccd_ms); }, TIMING},
+      {"broad_ms", [](S s) { return milliseconds(s.collisions.broad_ms); }, TIMING},
+      {"narrow_ms", [](S s) { return milliseconds(s.collisions.narrow_ms); }, TIMING},
+      {"response_ms", [](S s) { return milliseconds(s.collisions.response_ms); }, TIMING},
+      {"penetrations", [](S s) { return s.penetrations ? integer(*s.penetrations) : std::string(); }, EXACT},
+      {"external_work", [](S s) { return exact(s.external_work); }},
+      {"energy_excess", [](S s) { return exact(s.energy_excess); }},
+      {"step_halvings", [](S s) { return integer(s.step_halvings); }},
+      {"warnings", [](S s) { return integer(s.warnings); }},
+  };
+  return columns;
+}
+
 std::string stats_header() {
-  return "frame,sim_time,wall_ms,solve_ms,solver_iterations,kinetic_energy,potential_energy,max_stretch,"
-         "min_distance_obstacle,obstacle_contacts,solver_warnings,bvh_pairs,vf_tests,ee_tests,culled,separated,root_solves,"
-         "ccd_hits,impulse_iterations,impact_zones,proximity_impulses,rest_clamped_pairs,fail_safes,ccd_ms,broad_ms,narrow_ms,response_ms,penetrations,"
-         "external_work,energy_excess,step_halvings,warnings";
+  std::string header;
+  for (const StatsColumn& c : stats_columns()) {
+    if (!header.empty()) header += ',';
+    header += c.name;
+  }
+  return header;
 }
 
 std::string stats_row(const FrameStats& s) {
-  char buffer[1024];
-  char distance[32] = "";
-  if (s.min_distance_obstacle) std::snprintf(distance, sizeof distance, "%.17g", *s.min_distance_obstacle);
-  char penetrations[16] = "";
-  if (s.penetrations) std::snprintf(penetrations, sizeof penetrations, "%d", *s.penetrations);
-  const CollisionCounters& c = s.collisions;
-  std::snprintf(buffer, sizeof buffer,
-                "%d,%.17g,%.3f,%.3f,%ld,%.17g,%.17g,%.17g,%s,%d,%d,%ld,%ld,%ld,%llu,%llu,%llu,%ld,%ld,%ld,%ld,%ld,%ld,%.3f,%.3f,%.3f,%.3f,%s,"
-                "%.17g,%.17g,%d,%d",
-                s.frame, s.sim_time, s.wall_ms, s.solve_ms, s.solver_iterations, s.kinetic_energy, s.potential_energy,
-                s.max_stretch, distance, s.obstacle_contacts, s.solver_warnings, c.bvh_pairs, c.vf_tests, c.ee_tests,
-                static_cast<unsigned long long>(c.tests.culled), static_cast<unsigned long long>(c.tests.separated),
-                static_cast<unsigned long long>(c.tests.root_solves),
-                c.ccd_hits, c.impulse_iterations, c.impact_zones, c.proximity_impulses, c.rest_clamped_pairs, c.fail_safes, c.ccd_ms,
-                c.broad_ms, c.narrow_ms, c.response_ms, penetrations, s.external_work, s.energy_excess, s.step_halvings, s.warnings);
-  return buffer;
+  std::string row;
+  bool first = true;
+  for (const StatsColumn& c : stats_columns()) {
+    if (!first) row += ',';
+    row += c.value(s);
+    first = false;
+  }
+  return row;
 }
 
 std::filesystem::path mesh_path(const std::filesystem::path& out, int frame, const std::string& format) {

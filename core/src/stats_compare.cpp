@@ -11,29 +11,18 @@
 namespace drape {
 
 const std::map<std::string, ColumnTolerance>& stats_tolerances() {
-  static const std::map<std::string, ColumnTolerance> tolerances = {
-      {"frame", {0, 0}},
-      {"sim_time", {1e-12, 1e-12}},
-      {"wall_ms", {0, 0, true}},
-      {"solve_ms", {0, 0, true}},
-      {"ccd_ms", {0, 0, true}},
-      {"broad_ms", {0, 0, true}},
-      {"narrow_ms", {0, 0, true}},
-      {"response_ms", {0, 0, true}},
-      {"solver_iterations", {2, 0.05}},
-      {"kinetic_energy", {1e-9, 1e-6}},
-      {"potential_energy", {1e-9, 1e-6}},
-      {"max_stretch", {1e-9, 1e-6}},
-      {"min_distance_obstacle", {1e-7, 1e-6}},
-      {"obstacle_contacts", {2, 0.05}},
-      {"solver_warnings", {0, 0}},
-      {"penetrations", {0, 0}},
-      {"fail_safes", {0, 0}},
-  };
+  static const std::map<std::string, ColumnTolerance> tolerances = [] {
+    std::map<std::string, ColumnTolerance> out;
+    for (const StatsColumn& c : stats_columns())
+      if (c.tolerance.ignore || c.tolerance.absolute != DEFAULT_TOLERANCE.absolute ||
+          c.tolerance.relative != DEFAULT_TOLERANCE.relative)
+        out[c.name] = c.tolerance;
+    return out;
+  }();
   return tolerances;
 }
 
-ColumnTolerance default_tolerance() { return {1e-9, 1e-6}; }
+ColumnTolerance default_tolerance() { return DEFAULT_TOLERANCE; }
 
 namespace {
 

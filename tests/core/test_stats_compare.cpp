@@ -1,6 +1,7 @@
 // The frame-statistics comparison behind drape check-stats and the golden regressions.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <filesystem>
 #include <fstream>
 
@@ -66,5 +67,30 @@ TEST(StatsCompare, ARowWithAnotherCellCountIsAnErrorNamingTheLine) {
         EXPECT_NE(std::string(e.what()).find(path.string() + expected), std::string::npos) << e.what();
       }
     }
+  }
+}
+
+TEST(StatsColumns, HeaderRowsAndTolerancesComeFromOneTable) {
+  // One column table: the header names its columns in order, a row has one cell for each, and
+  // the comparison's tolerances are the table's (timings ignored, the rest compared).
+  const auto& columns = stats_columns();
+  std::string expected;
+  for (const StatsColumn& c : columns) expected += (expected.empty() ? std::string() : std::string(",")) + c.name;
+  EXPECT_EQ(stats_header(), expected);
+  FrameStats s;
+  s.frame = 7;
+  s.min_distance_obstacle = 0.25;
+  const std::string row = stats_row(s);
+  EXPECT_EQ(std::count(row.begin(), row.end(), ','), std::ptrdiff_t(columns.size()) - 1);
+  EXPECT_EQ(row.substr(0, 2), "7,");
+  for (const StatsColumn& c : columns) {
+    const std::string name = c.name;
+    const bool timing = name.size() > 3 && name.substr(name.size() - 3) == "_ms";
+    EXPECT_EQ(c.tolerance.ignore, timing) << name;
+    const auto listed = stats_tolerances().find(name);
+    const ColumnTolerance used = listed != stats_tolerances().end() ? listed->second : default_tolerance();
+    EXPECT_EQ(used.ignore, c.tolerance.ignore) << name;
+    EXPECT_EQ(used.absolute, c.tolerance.absolute) << name;
+    EXPECT_EQ(used.relative, c.tolerance.relative) << name;
   }
 }

@@ -7,16 +7,12 @@
 #include <optional>
 #include <string>
 
+#include "drape/core/stats_columns.h"
+
 namespace drape {
 
-/// |a - b| <= absolute + relative * max(|a|, |b|); ignore skips the column (timings).
-struct ColumnTolerance {
-  double absolute = 0;
-  double relative = 0;
-  bool ignore = false;
-};
-
-/// The tolerances drape uses, by column name; columns not listed get default_tolerance().
+/// The tolerances of stats_columns() other than the default, by column name; columns not
+/// listed get default_tolerance().
 const std::map<std::string, ColumnTolerance>& stats_tolerances();
 ColumnTolerance default_tolerance();
 
