@@ -555,7 +555,7 @@ CollisionCounters CollisionPipeline::resolve(const std::vector<Vec3>& start, Sca
   m.repel(first, h, motion, contacts, counters);
   m.keep_out_of_analytic_obstacles(t + h, h, motion);
   hits = m.detect(h, motion, counters);
-  for (int round = 0; !hits.empty() && round < m.settings.max_impulse_iterations; ++round) {
+  for (int round = 0; !hits.empty() && round < m.model.scene.collisions.max_impulse_iterations; ++round) {
     ++counters.impulse_iterations;
     for (const auto& [contact, toc] : hits) contacts.add(contact, separation, m.inverse_mass);
     m.impulses(contacts, h, motion);
@@ -564,7 +564,7 @@ CollisionCounters CollisionPipeline::resolve(const std::vector<Vec3>& start, Sca
   }
   // Impact zones, growing until no collision is left.
   Zones zones(int(m.start.size()));
-  for (int round = 0; !hits.empty() && round < m.settings.max_zone_iterations; ++round) {
+  for (int round = 0; !hits.empty() && round < m.model.scene.collisions.max_zone_iterations; ++round) {
     for (const auto& [contact, toc] : hits)
       for (int k = 1; k < 4; ++k) zones.join(contact.vertex[0], contact.vertex[k]);
     m.apply_zones(zones, h, motion, counters);

@@ -100,8 +100,6 @@ Integrator::Integrator(const Model& model, int threads) : model_(model), work_(s
   if (CollisionPipeline::needed(model)) {
     CollisionSettings settings;
     settings.threads = threads;
-    settings.max_impulse_iterations = model.scene.collisions.max_impulse_iterations;
-    settings.max_zone_iterations = model.scene.collisions.max_zone_iterations;
     collisions_ = std::make_unique<CollisionPipeline>(model, settings);
   }
   Workspace& w = *work_;

@@ -14,14 +14,15 @@ using namespace drape;
 namespace {
 
 // Two square cloths of 2 x 2 quads, 20 cm wide, one above the other (a gap of 2 cm, 5 mm
-// thickness), cloth against cloth on; the lower one pinned when asked.
-Model two_sheets(Scalar friction, bool pin_lower) {
+// thickness), cloth against cloth on; the lower one pinned when asked; rounds: more keys of
+// the collisions section.
+Model two_sheets(Scalar friction, bool pin_lower, const std::string& rounds = "") {
   std::ostringstream json;
   json << R"({"frame_time": 0.05, "frame_steps": 1, "friction": )" << friction << R"(,
     "cloths": [{"grid": {"size": [0.2, 0.2], "resolution": [2, 2]}},
                {"grid": {"size": [0.2, 0.2], "resolution": [2, 2]}, "transform": {"translate": [0.013, 0.007, 0.02]}}],
     )" << (pin_lower ? R"("handles": [{"cloth": 0, "corners": ["top-left", "top-right", "bottom-left", "bottom-right"]}],)" : "")
-       << R"("collisions": {"self": true, "thickness": 0.005}})";
+       << R"("collisions": {"self": true, "thickness": 0.005)" << rounds << "}}";
   return build_model(parse_scene(json.str(), "inline.json"));
 }
 
@@ -149,7 +150,7 @@ TEST(Collision, ImpactZonesKeepMomentumAndAngularMomentum) {
   // No impulse rounds: the collisions go straight to rigid impact zones. The upper sheet
   // falls through the lower, free one while turning; each zone keeps its momentum and
   // angular momentum, so the pair does.
-  const Model model = two_sheets(0, false);
+  const Model model = two_sheets(0, false, R"(, "max_impulse_iterations": 0)");
   const Scalar h = model.scene.timestep();
   const std::vector<Vec3>& start = model.initial_positions;
   std::vector<Vec3> motion(model.vertex_count());
@@ -158,9 +159,7 @@ TEST(Collision, ImpactZonesKeepMomentumAndAngularMomentum) {
   for (std::size_t v = 0; v < motion.size(); ++v)
     motion[v] = int(v) >= second ? Vec3(Vec3(0, 0, -2.0) + spin.cross(start[v] - centre)) : Vec3(0, 0, 0.5);
   const std::vector<Vec3> before = motion;
-  CollisionSettings settings;
-  settings.max_impulse_iterations = 0;
-  CollisionPipeline pipeline(model, settings);
+  CollisionPipeline pipeline(model, CollisionSettings{});
   const CollisionCounters c = pipeline.resolve(start, 0, h, motion);
   EXPECT_GT(c.impact_zones, 0);
   EXPECT_EQ(c.fail_safes, 0);
@@ -172,13 +171,10 @@ TEST(Collision, ImpactZonesKeepMomentumAndAngularMomentum) {
 TEST(Collision, TheFailSafeStopsWhatNothingElseResolved) {
   // No impulse and no impact-zone rounds: the fail-safe keeps the colliding vertices at their
   // start (and, if that is not enough, every cloth vertex), and the step is then free.
-  const Model model = two_sheets(0, false);
+  const Model model = two_sheets(0, false, R"(, "max_impulse_iterations": 0, "max_zone_iterations": 0)");
   const Scalar h = model.scene.timestep();
   std::vector<Vec3> motion = motions(model, Vec3(0, 0, -2.0), Vec3(0, 0, 0.5));
-  CollisionSettings settings;
-  settings.max_impulse_iterations = 0;
-  settings.max_zone_iterations = 0;
-  CollisionPipeline pipeline(model, settings);
+  CollisionPipeline pipeline(model, CollisionSettings{});
   const CollisionCounters c = pipeline.resolve(model.initial_positions, 0, h, motion);
   EXPECT_EQ(c.fail_safes, 1);
   int stopped = 0;

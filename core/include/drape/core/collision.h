@@ -22,10 +22,9 @@
 
 namespace drape {
 
-/// Accuracy and effort knobs of the response, with their defaults.
+/// What the response needs beyond the scene (whose collisions section, compiled into the
+/// model, gives the thickness, the CCD method and the impulse and impact-zone rounds).
 struct CollisionSettings {
-  int max_impulse_iterations = 8;  ///< CCD-impulse rounds before impact zones take over
-  int max_zone_iterations = 16;    ///< impact-zone rounds before the fail-safe
   /// Separation speed an impulse leaves between colliding features, as a fraction of
   /// thickness / h: enough that the next round does not find the same contact again.
   Scalar separation_fraction = 0.1;
