@@ -110,7 +110,7 @@ Integrator::Integrator(const Model& model, int threads) : model_(model), work_(s
     if (model.pin_of_vertex[v] < 0) w.free_index[v] = w.free_count++;
   energy_tolerance_ = STEP_ENERGY_TOLERANCE * energy_scale(model);
   if (model.scene.solver.kind == SolverKind::Projective) {  // a scene pays only for what it asks for
-    projective_ = std::make_unique<ProjectiveSolver>(model, w.free_index, w.free_count);
+    projective_ = std::make_unique<ProjectiveSolver>(model, w.free_index, w.free_count, threads);
     return;
   }
   solver_ = make_linear_solver(model.scene.solver);

@@ -6,6 +6,10 @@
 #include <cmath>
 #include <limits>
 
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+#include <tbb/task_arena.h>
+
 namespace drape {
 namespace {
 
@@ -20,8 +24,9 @@ Scalar mean_edge(const Model& model) {
 
 }  // namespace
 
-ProjectiveSolver::ProjectiveSolver(const Model& model, std::vector<int> free_index, int free_count)
+ProjectiveSolver::ProjectiveSolver(const Model& model, std::vector<int> free_index, int free_count, int threads)
     : model_(model),
+      arena_(std::make_unique<tbb::task_arena>(std::max(1, threads))),
       free_index_(std::move(free_index)),
       free_count_(free_count),
       iterations_(model.scene.solver.iterations),
@@ -33,7 +38,22 @@ ProjectiveSolver::ProjectiveSolver(const Model& model, std::vector<int> free_ind
   predicted_ = base_;
   rhs_.setZero(free_count_, 3);
   solution_.setZero(free_count_, 3);
+  // Each free vertex's springs, in the model's order, with the sign of its end (+1 for i).
+  incidence_start_.assign(std::size_t(free_count_) + 1, 0);
+  for (const Spring& s : model.springs)
+    for (int end : {s.i, s.j})
+      if (const int a = free_index_[std::size_t(end)]; a >= 0) ++incidence_start_[std::size_t(a) + 1];
+  for (int a = 0; a < free_count_; ++a) incidence_start_[std::size_t(a) + 1] += incidence_start_[std::size_t(a)];
+  incidence_.resize(std::size_t(incidence_start_.back()));
+  std::vector<int> filled(incidence_start_.begin(), incidence_start_.end() - 1);
+  for (std::size_t k = 0; k < model.springs.size(); ++k) {
+    const Spring& s = model.springs[k];
+    if (const int a = free_index_[std::size_t(s.i)]; a >= 0) incidence_[std::size_t(filled[std::size_t(a)]++)] = int(2 * k);
+    if (const int b = free_index_[std::size_t(s.j)]; b >= 0) incidence_[std::size_t(filled[std::size_t(b)]++)] = int(2 * k + 1);
+  }
 }
+
+ProjectiveSolver::~ProjectiveSolver() = default;
 
 ProjectiveSolver::System* ProjectiveSolver::system(Scalar h, std::string& error) {
   if (auto found = systems_.find(h); found != systems_.end()) return &found->second;
@@ -270,32 +290,11 @@ Scalar ProjectiveSolver::evaluate(const std::vector<Vec3>& x, Block* gradient) {
   const Scalar h = step_.step->h;
   const std::vector<Vec3>& x0 = *step_.step->start;
   const Vec3 wind = m.scene.wind ? m.scene.wind->velocity : Vec3::Zero();
-  // With a gradient (L-BFGS) each term adds its own to it; without (local-global) the local
-  // step's right-hand side is summed instead (the global step's matrix times x less it is the
-  // same gradient: each target minimises its term).
-  std::vector<Vec3>& g = gradient_rows_;  // the gradient's rows, contiguous while summed
-  if (gradient) g.assign(std::size_t(free_count_), Vec3::Zero());
-  else sums_ = base_;
-  // The vertices' part: inertia, the air's damping, the held vertices' penalty.
-  Scalar total = 0;
-  for (std::size_t v = 0; v < x.size(); ++v) {
-    const int a = free_index_[v];
-    if (a < 0) continue;
-    const Scalar mass = m.masses[v], air = h * m.air_damping[v] * mass;
-    const Vec3 inertia = x[v] - predicted_[std::size_t(a)], drag = x[v] - x0[v] - h * wind;
-    total += 0.5 * mass * inertia.squaredNorm() + 0.5 * air * drag.squaredNorm();
-    if (gradient) g[std::size_t(a)] = mass * inertia + air * drag;
-  }
-  if (const HeldVertices* held = step_.held)
-    for (std::size_t k = 0; k < held->vertices.size(); ++k) {
-      const Vec3 off = x[std::size_t(held->vertices[k])] - held->targets[k];
-      total += 0.5 * held_penalty_[k] * off.squaredNorm();
-      if (gradient) g[std::size_t(free_index_[std::size_t(held->vertices[k])])] += held_penalty_[k] * off;
-    }
-  // The springs: elastic energy of the length's change and damping along the direction at the
-  // step's start. The local step's targets: p = r d (rest length along the current direction
-  // d) and q = z - ((z - z0) . d0) d0, weighted.
-  for (std::size_t k = 0; k < sys.springs.size(); ++k) {
+  // Each spring's elastic energy of its length's change and its damping along its direction
+  // at the step's start, with the pull on its end i (the gradient's part; -pull on j) and the
+  // local step's weighted target (rest length along the current direction d, p = r d; z less
+  // its change along d0, q = z - ((z - z0) . d0) d0).
+  const auto spring = [&](std::size_t k, Vec3& pull, Vec3& target) {
     const SpringTerm& s = sys.springs[k];
     const Vec3 z = x[std::size_t(s.i)] - x[std::size_t(s.j)];
     const Scalar length = z.norm();
@@ -306,23 +305,93 @@ Scalar ProjectiveSolver::evaluate(const std::vector<Vec3>& x, Block* gradient) {
     // the objective.
     const Vec3& d0 = spring_direction_[k];
     const Scalar along = (z - spring_start_[k]).dot(d0);
-    total += 0.5 * s.elastic * (length - s.rest) * (length - s.rest) + 0.5 * s.viscous * along * along;
-    if (gradient) {
-      const Vec3 pull = s.elastic * (length - s.rest) * d + s.viscous * along * d0;
-      if (s.a >= 0) g[std::size_t(s.a)] += pull;
-      if (s.b >= 0) g[std::size_t(s.b)] -= pull;
-      continue;
+    pull = s.elastic * (length - s.rest) * d + s.viscous * along * d0;
+    target = (s.elastic * s.rest) * d + s.viscous * (z - along * d0);
+    return 0.5 * s.elastic * (length - s.rest) * (length - s.rest) + 0.5 * s.viscous * along * along;
+  };
+  // The vertices' part of the objective: inertia, the air's damping.
+  const auto vertex = [&](std::size_t v, int a, Vec3& grad) {
+    const Scalar mass = m.masses[v], air = h * m.air_damping[v] * mass;
+    const Vec3 inertia = x[v] - predicted_[std::size_t(a)], drag = x[v] - x0[v] - h * wind;
+    grad = mass * inertia + air * drag;
+    return 0.5 * mass * inertia.squaredNorm() + 0.5 * air * drag.squaredNorm();
+  };
+  Scalar total = 0;
+  if (gradient) {
+    // L-BFGS: in parallel, springs then vertices, each vertex summing its springs' pulls in
+    // the model's order, and the energies summed by fixed blocks in order: the same bits for
+    // any thread count.
+    const std::size_t springs = sys.springs.size(), vertices = x.size();
+    pulls_.resize(springs);
+    spring_energy_.resize(springs);
+    vertex_energy_.assign(vertices, 0);
+    std::vector<Vec3>& g = gradient_rows_;
+    g.resize(std::size_t(free_count_));
+    arena_->execute([&] {
+      tbb::parallel_for(tbb::blocked_range<std::size_t>(0, springs, PARALLEL_GRAIN), [&](const auto& r) {
+        Vec3 target;
+        for (std::size_t k = r.begin(); k < r.end(); ++k) spring_energy_[k] = spring(k, pulls_[k], target);
+      });
+      tbb::parallel_for(tbb::blocked_range<std::size_t>(0, vertices, PARALLEL_GRAIN), [&](const auto& r) {
+        for (std::size_t v = r.begin(); v < r.end(); ++v) {
+          const int a = free_index_[v];
+          if (a < 0) continue;
+          Vec3 grad;
+          vertex_energy_[v] = vertex(v, a, grad);
+          for (int e = incidence_start_[std::size_t(a)]; e < incidence_start_[std::size_t(a) + 1]; ++e) {
+            const int end = incidence_[std::size_t(e)];
+            grad += (end % 2 == 0 ? 1.0 : -1.0) * pulls_[std::size_t(end / 2)];
+          }
+          g[std::size_t(a)] = grad;
+        }
+      });
+    });
+    total = ordered_sum(vertex_energy_) + ordered_sum(spring_energy_);
+  } else {
+    // Local-global: the local step's right-hand side, summed serially.
+    sums_ = base_;
+    for (std::size_t v = 0; v < x.size(); ++v)
+      if (const int a = free_index_[v]; a >= 0) {
+        Vec3 grad;
+        total += vertex(v, a, grad);
+      }
+    for (std::size_t k = 0; k < sys.springs.size(); ++k) {
+      const SpringTerm& s = sys.springs[k];
+      Vec3 pull, target;
+      total += spring(k, pull, target);
+      const Scalar weight = s.elastic + s.viscous;
+      if (s.a >= 0) sums_[std::size_t(s.a)] += s.b >= 0 ? target : Vec3(target + weight * x[std::size_t(s.j)]);
+      if (s.b >= 0) sums_[std::size_t(s.b)] += s.a >= 0 ? Vec3(-target) : Vec3(weight * x[std::size_t(s.i)] - target);
     }
-    const Vec3 target = (s.elastic * s.rest) * d + s.viscous * (z - along * d0);
-    const Scalar weight = s.elastic + s.viscous;
-    if (s.a >= 0) sums_[std::size_t(s.a)] += s.b >= 0 ? target : Vec3(target + weight * x[std::size_t(s.j)]);
-    if (s.b >= 0) sums_[std::size_t(s.b)] += s.a >= 0 ? Vec3(-target) : Vec3(weight * x[std::size_t(s.i)] - target);
   }
-  total += contact_terms(x, gradient ? &g : nullptr, false);
+  // The held vertices' penalty (local-global's spread).
+  if (const HeldVertices* held = step_.held)
+    for (std::size_t k = 0; k < held->vertices.size(); ++k) {
+      const Vec3 off = x[std::size_t(held->vertices[k])] - held->targets[k];
+      total += 0.5 * held_penalty_[k] * off.squaredNorm();
+      if (gradient) gradient_rows_[std::size_t(free_index_[std::size_t(held->vertices[k])])] += held_penalty_[k] * off;
+    }
+  total += contact_terms(x, gradient ? &gradient_rows_ : nullptr, false);
   if (gradient) {
     gradient->resize(free_count_, 3);
-    for (int a = 0; a < free_count_; ++a) gradient->row(a) = g[std::size_t(a)].transpose();
+    for (int a = 0; a < free_count_; ++a) gradient->row(a) = gradient_rows_[std::size_t(a)].transpose();
   }
+  return total;
+}
+
+Scalar ProjectiveSolver::ordered_sum(const std::vector<Scalar>& values) {
+  // Blocks of PARALLEL_GRAIN summed in parallel, then the blocks' sums in order.
+  const std::size_t blocks = (values.size() + PARALLEL_GRAIN - 1) / PARALLEL_GRAIN;
+  block_sums_.assign(blocks, 0);
+  arena_->execute([&] {
+    tbb::parallel_for(std::size_t(0), blocks, [&](std::size_t b) {
+      Scalar sum = 0;
+      for (std::size_t i = b * PARALLEL_GRAIN; i < std::min(values.size(), (b + 1) * PARALLEL_GRAIN); ++i) sum += values[i];
+      block_sums_[b] = sum;
+    });
+  });
+  Scalar total = 0;
+  for (Scalar sum : block_sums_) total += sum;
   return total;
 }
 

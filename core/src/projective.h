@@ -22,8 +22,11 @@
 /// acceleration (solver.chebyshev) brings it closer in the same iterations.
 
 #include <map>
+#include <memory>
 #include <string>
 #include <vector>
+
+#include <tbb/task_arena.h>
 
 #include "drape/core/collision.h"
 #include "drape/core/linear_solver.h"
@@ -74,8 +77,10 @@ struct HeldVertices {
 
 class ProjectiveSolver {
  public:
-  /// free_index: vertex -> index among the free vertices, or -1 for a pinned one.
-  ProjectiveSolver(const Model& model, std::vector<int> free_index, int free_count);
+  /// free_index: vertex -> index among the free vertices, or -1 for a pinned one; threads:
+  /// for L-BFGS's passes over the springs and vertices (results do not depend on it).
+  ProjectiveSolver(const Model& model, std::vector<int> free_index, int free_count, int threads = 1);
+  ~ProjectiveSolver();
   /// Runs the scene's iterations from positions (every vertex: the first guess for the free
   /// ones, the end positions of the pinned ones) and leaves the end of the step there. With
   /// held, the held vertices keep to their targets: exactly with L-BFGS (left out of its
@@ -168,6 +173,15 @@ class ProjectiveSolver {
   Block rhs_, solution_;
   Block gradient_, trial_gradient_, direction_;  // L-BFGS, over the free vertices
   std::vector<Vec3> gradient_rows_;
+  // L-BFGS's parallel evaluation: each spring's pull on its end i and its energy, each
+  // vertex's energy, and each free vertex's springs (2 k for spring k's end i, 2 k + 1 for j).
+  std::vector<Vec3> pulls_;
+  std::vector<Scalar> spring_energy_, vertex_energy_, block_sums_;
+  std::vector<int> incidence_start_, incidence_;
+  std::unique_ptr<tbb::task_arena> arena_;
+  static constexpr std::size_t PARALLEL_GRAIN = 2048;  // springs or vertices a task, and a sum's block
+  // values summed by blocks of PARALLEL_GRAIN, the blocks in order.
+  Scalar ordered_sum(const std::vector<Scalar>& values);
   std::vector<char> fixed_;  // per free vertex: held at its target (L-BFGS leaves it out)
   std::vector<Block> history_s_, history_t_;              // its steps and gradient changes (a ring)
   Block step_s_, step_t_;                                 // the last step's pair, before it is kept

@@ -164,14 +164,16 @@ TEST(Projective, EnergyStaysBelowItsStartWithoutInputWhenConverged) {
 }
 
 TEST(Projective, AClothLandingOnASphereStaysOutsideItAndAtRest) {
-  const Model model = model_of(R"({"frame_time": 0.04, "frame_steps": 8, "frames": 30,
+  // 2.4 s: it lands at about 0.2 s and settles, swaying (kinetic energy about 1e-3 J at 1.2 s,
+  // 3e-5 J at 2.4 s).
+  const Model model = model_of(R"({"frame_time": 0.04, "frame_steps": 8, "frames": 60,
     "cloths": [{"grid": {"size": [1, 1], "resolution": [16, 16]}, "transform": {"translate": [0, 0, 1.1]}}],
     "obstacles": [{"sphere": {"center": [0, 0, 0.5], "radius": 0.5}}, {"plane": {"point": [0, 0, 0], "normal": [0, 0, 1]}}],
     "solver": {"type": "projective"}})");
   State state = initial_state(model);
   Integrator integrator(model);
   const Scalar start = kinetic_energy(model, state) + potential_energy(model, state);
-  for (int k = 0; k < 8 * 30; ++k) {
+  for (int k = 0; k < 8 * 60; ++k) {
     const StepReport r = integrator.step(state);
     ASSERT_TRUE(r.ok) << r.failure;
     EXPECT_LE(kinetic_energy(model, state) + potential_energy(model, state), start) << "step " << k;
@@ -181,6 +183,24 @@ TEST(Projective, AClothLandingOnASphereStaysOutsideItAndAtRest) {
   Scalar closest = 1;
   for (const Vec3& x : state.positions) closest = std::min(closest, (x - Vec3(0, 0, 0.5)).norm() - 0.5);
   EXPECT_LT(closest, 0.005 * 1.15);
-  EXPECT_LT(kinetic_energy(model, state), 1e-3);
+  EXPECT_LT(kinetic_energy(model, state), 1e-4);
   EXPECT_LT(max_stretch(model, state), 1.05);
+}
+
+TEST(Projective, TheSameBitsForAnyThreadCount) {
+  // L-BFGS's passes over springs and vertices run in parallel (several blocks of springs
+  // here): one, two and three threads give the same positions to the last bit.
+  const Model model = model_of(R"({"frame_time": 0.04, "frame_steps": 8,
+    "cloths": [{"grid": {"size": [1, 1], "resolution": [30, 30]}, "transform": {"translate": [0, 0, 1.02]}}],
+    "obstacles": [{"sphere": {"center": [0, 0, 0.5], "radius": 0.5}}], "solver": {"type": "projective"}})");
+  ASSERT_GT(model.springs.size(), 2u * 2048);
+  std::vector<State> states;
+  for (int threads : {1, 2, 3}) {
+    State state = initial_state(model);
+    Integrator integrator(model, threads);
+    for (int k = 0; k < 40; ++k) ASSERT_TRUE(integrator.step(state).ok);
+    states.push_back(state);
+  }
+  for (std::size_t t = 1; t < states.size(); ++t)
+    for (std::size_t v = 0; v < states[0].positions.size(); ++v) ASSERT_EQ(states[t].positions[v], states[0].positions[v]) << v;
 }
