@@ -168,25 +168,26 @@ bool ProjectiveSolver::solve(const ProjectiveStep& step, std::vector<Vec3>& posi
     for (std::size_t v = 0; v < x0.size(); ++v)
       if (const int a = free_index_[v]; a >= 0) vertex_stiffness_[std::size_t(a)] = CONTACT_HOLD * m.masses[v];
     shapes_.clear();
+    // Each sphere and plane posed at the step's end, and at its start for the gaps below.
+    const auto pose = [](const Obstacle& obstacle, Scalar t) {
+      const ObstacleSpec& o = obstacle.spec;
+      if (o.kind == ObstacleSpec::Kind::Sphere) return PosedShape{&obstacle, true, o.motion.position(o.center, t), Vec3::UnitZ(), o.radius};
+      const Vec3 point = o.motion.position(o.point, t);
+      return PosedShape{&obstacle, false, point, (o.motion.position(o.point + o.normal, t) - point).normalized(), 0};
+    };
     if (c.analytic)
-      for (const Obstacle& obstacle : m.obstacles) {
-        const ObstacleSpec& o = obstacle.spec;
-        if (o.kind == ObstacleSpec::Kind::Sphere)
-          shapes_.push_back({&obstacle, true, o.motion.position(o.center, c.t_end), Vec3::UnitZ(), o.radius});
-        else if (o.kind == ObstacleSpec::Kind::Plane) {
-          const Vec3 point = o.motion.position(o.point, c.t_end);
-          shapes_.push_back({&obstacle, false, point, (o.motion.position(o.point + o.normal, c.t_end) - point).normalized(), 0});
-        }
-      }
+      for (const Obstacle& obstacle : m.obstacles)
+        if (obstacle.spec.kind != ObstacleSpec::Kind::Mesh) shapes_.push_back(pose(obstacle, c.t_end));
     // The gap each free vertex keeps from each: its distance at the step's start, at most the
     // margin (one that starts within the thickness is pushed out by the response, which moves
     // it without giving it speed).
     kept_gap_.resize(shapes_.size() * std::size_t(free_count_));
-    for (std::size_t k = 0; k < shapes_.size(); ++k)
+    for (std::size_t k = 0; k < shapes_.size(); ++k) {
+      const PosedShape at_start = pose(*shapes_[k].obstacle, c.t_end - h);
       for (std::size_t v = 0; v < x0.size(); ++v)
         if (const int a = free_index_[v]; a >= 0)
-          kept_gap_[k * std::size_t(free_count_) + std::size_t(a)] =
-              std::min(analytic_contact(*shapes_[k].obstacle, c.t_end - h, x0[v]).signed_distance, c.margin);
+          kept_gap_[k * std::size_t(free_count_) + std::size_t(a)] = std::min(at_start.distance(x0[v]).first, c.margin);
+    }
     contact_bound_.resize(c.mesh.size());
     contact_stiffness_.resize(c.mesh.size());
     for (std::size_t k = 0; k < c.mesh.size(); ++k) {
@@ -221,16 +222,7 @@ Scalar ProjectiveSolver::contact_terms(const std::vector<Vec3>& x, std::vector<V
     for (std::size_t v = 0; v < x.size(); ++v) {
       const int a = free_index_[v];
       if (a < 0) continue;
-      Vec3 normal = shape.normal;
-      Scalar distance = 0;
-      if (shape.sphere) {
-        const Vec3 offset = x[v] - shape.point;
-        const Scalar length = offset.norm();
-        if (length > 0) normal = offset / length;
-        distance = length - shape.radius;
-      } else {
-        distance = normal.dot(x[v] - shape.point);
-      }
+      const auto [distance, normal] = shape.distance(x[v]);
       const Scalar depth = kept_gap[a] - distance;
       if (!(depth > 0)) continue;
       const Scalar stiffness = vertex_stiffness_[std::size_t(a)];
@@ -239,7 +231,8 @@ Scalar ProjectiveSolver::contact_terms(const std::vector<Vec3>& x, std::vector<V
       if (impulses) {
         const Scalar impulse = stiffness * depth / h;  // the term's force is its gradient over h^2
         contact_impulse_[v] += impulse;
-        contact_work_ += impulse * normal.dot(analytic_contact(*shape.obstacle, c->t_end, x[v]).surface_velocity);
+        if (shape.obstacle->spec.motion.moves())
+          contact_work_ += impulse * normal.dot(analytic_contact(*shape.obstacle, c->t_end, x[v]).surface_velocity);
       }
     }
   }

@@ -196,6 +196,13 @@ class ProjectiveSolver {
     Vec3 point = Vec3::Zero();  // centre, or a point of the plane
     Vec3 normal = Vec3::UnitZ();  // the plane's
     Scalar radius = 0;
+    // The signed distance of x (positive outside) and the outward normal there.
+    std::pair<Scalar, Vec3> distance(const Vec3& x) const {
+      if (!sphere) return {normal.dot(x - point), normal};
+      const Vec3 offset = x - point;
+      const Scalar length = offset.norm();
+      return {length - radius, length > 0 ? Vec3(offset / length) : Vec3::UnitZ()};
+    }
   };
   std::vector<PosedShape> shapes_;  // empty unless the step holds analytic contacts
   std::vector<Scalar> kept_gap_;    // per shape and free vertex (shape-major): the gap the solve keeps
