@@ -182,7 +182,7 @@ Command add_run_command(CLI::App& app) {
   cmd->add_option("--frames", args->frames, "Frames to simulate (default: the scene's)")->check(CLI::Range(1, 10000000));
   cmd->add_option("--out", args->out, "Output folder (default: the scene's output.folder)");
   cmd->add_flag("-q,--quiet", args->quiet, "Print nothing but errors");
-  cmd->add_option("-j,--threads", args->threads, "Threads for the collision narrow phase (results do not depend on it)")
+  cmd->add_option("-j,--threads", args->threads, "Threads for the collision narrow phase and the projective solver (results do not depend on it)")
       ->check(CLI::Range(1, 256))
       ->capture_default_str();
   cmd->add_option("--ccd", args->method, "CCD method, overriding the scene's collisions.method")

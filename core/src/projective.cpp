@@ -26,13 +26,13 @@ Scalar mean_edge(const Model& model) {
 
 ProjectiveSolver::ProjectiveSolver(const Model& model, std::vector<int> free_index, int free_count, int threads)
     : model_(model),
-      arena_(std::make_unique<tbb::task_arena>(std::max(1, threads))),
       free_index_(std::move(free_index)),
       free_count_(free_count),
       iterations_(model.scene.solver.iterations),
       history_(model.scene.solver.history),
       rho_(model.scene.solver.chebyshev),
-      converged_move_(model.scene.solver.tolerance * mean_edge(model)) {
+      converged_move_(model.scene.solver.tolerance * mean_edge(model)),
+      arena_(std::make_unique<tbb::task_arena>(std::max(1, threads))) {
   base_.assign(std::size_t(free_count_), Vec3::Zero());
   sums_ = base_;
   predicted_ = base_;

@@ -96,7 +96,9 @@ TEST(Integrator, AReusedFactorisationGivesTheFreshOnesAnswer) {
     EXPECT_LT(worst, 1e-8) << scene;
     EXPECT_LE(ib.factorisations(), ia.factorisations()) << scene;
     EXPECT_EQ(ib.analyses(), 1) << scene;
-    if (scene == falling) EXPECT_LT(ib.factorisations(), 5) << "of " << ia.factorisations();
+    if (scene == falling) {
+      EXPECT_LT(ib.factorisations(), 5) << "of " << ia.factorisations();
+    }
   }
 }
 

@@ -3,7 +3,9 @@
 
 #include <algorithm>
 #include <filesystem>
+#include <cstdio>
 #include <fstream>
+#include <map>
 
 #include "drape/core/stats_compare.h"
 
@@ -71,26 +73,54 @@ TEST(StatsCompare, ARowWithAnotherCellCountIsAnErrorNamingTheLine) {
 }
 
 TEST(StatsColumns, HeaderRowsAndTolerancesComeFromOneTable) {
-  // One column table: the header names its columns in order, a row has one cell for each, and
-  // the comparison's tolerances are the table's (timings ignored, the rest compared).
-  const auto& columns = stats_columns();
-  std::string expected;
-  for (const StatsColumn& c : columns) expected += (expected.empty() ? std::string() : std::string(",")) + c.name;
-  EXPECT_EQ(stats_header(), expected);
+  // The table gives the file its header, each row one cell per column written as before the
+  // table existed (the literal header and printf format below are the earlier code's), and
+  // the comparison its tolerances (the earlier list, literally).
+  EXPECT_EQ(stats_header(),
+            "frame,sim_time,wall_ms,solve_ms,solver_iterations,kinetic_energy,potential_energy,max_stretch,"
+            "min_distance_obstacle,obstacle_contacts,solver_warnings,bvh_pairs,vf_tests,ee_tests,culled,separated,root_solves,"
+            "ccd_hits,impulse_iterations,impact_zones,proximity_impulses,rest_clamped_pairs,fail_safes,ccd_ms,broad_ms,narrow_ms,"
+            "response_ms,penetrations,external_work,energy_excess,step_halvings,warnings");
   FrameStats s;
-  s.frame = 7;
-  s.min_distance_obstacle = 0.25;
+  s.frame = 7, s.sim_time = 0.1, s.wall_ms = 12.34567, s.solve_ms = 0.5, s.solver_iterations = 42;
+  s.kinetic_energy = 1.0 / 3, s.potential_energy = -2.5e-7, s.max_stretch = 1.01, s.min_distance_obstacle = 0.25;
+  s.obstacle_contacts = 3, s.solver_warnings = 1, s.external_work = 1e-20, s.energy_excess = -0.125, s.step_halvings = 2;
+  s.warnings = 1;
+  CollisionCounters& c = s.collisions;
+  c.bvh_pairs = 100, c.vf_tests = 11, c.ee_tests = 12, c.tests.culled = 13, c.tests.separated = 14, c.tests.root_solves = 15;
+  c.ccd_hits = 16, c.impulse_iterations = 17, c.impact_zones = 18, c.proximity_impulses = 19, c.rest_clamped_pairs = 20;
+  c.fail_safes = 0, c.ccd_ms = 1.0005, c.broad_ms = 2, c.narrow_ms = 3, c.response_ms = 4;
+  char expected[1024];
+  std::snprintf(expected, sizeof expected,
+                "%d,%.17g,%.3f,%.3f,%ld,%.17g,%.17g,%.17g,%.17g,%d,%d,%ld,%ld,%ld,%llu,%llu,%llu,%ld,%ld,%ld,%ld,%ld,%ld,%.3f,%.3f,%.3f,%.3f,,"
+                "%.17g,%.17g,%d,%d",
+                s.frame, s.sim_time, s.wall_ms, s.solve_ms, s.solver_iterations, s.kinetic_energy, s.potential_energy,
+                s.max_stretch, *s.min_distance_obstacle, s.obstacle_contacts, s.solver_warnings, c.bvh_pairs, c.vf_tests,
+                c.ee_tests, static_cast<unsigned long long>(c.tests.culled), static_cast<unsigned long long>(c.tests.separated),
+                static_cast<unsigned long long>(c.tests.root_solves), c.ccd_hits, c.impulse_iterations, c.impact_zones,
+                c.proximity_impulses, c.rest_clamped_pairs, c.fail_safes, c.ccd_ms, c.broad_ms, c.narrow_ms, c.response_ms,
+                s.external_work, s.energy_excess, s.step_halvings, s.warnings);
+  EXPECT_EQ(stats_row(s), expected);
+  s.penetrations = 5;
+  s.min_distance_obstacle.reset();
   const std::string row = stats_row(s);
-  EXPECT_EQ(std::count(row.begin(), row.end(), ','), std::ptrdiff_t(columns.size()) - 1);
-  EXPECT_EQ(row.substr(0, 2), "7,");
-  for (const StatsColumn& c : columns) {
-    const std::string name = c.name;
-    const bool timing = name.size() > 3 && name.substr(name.size() - 3) == "_ms";
-    EXPECT_EQ(c.tolerance.ignore, timing) << name;
+  EXPECT_NE(row.find(",,3,1,100,"), std::string::npos) << "no distance: an empty cell; " << row;
+  EXPECT_NE(row.find(",4.000,5,"), std::string::npos) << "penetrations counted: " << row;
+  const std::map<std::string, std::pair<double, double>> earlier = {
+      {"frame", {0, 0}},           {"sim_time", {1e-12, 1e-12}},          {"solver_iterations", {2, 0.05}},
+      {"kinetic_energy", {1e-9, 1e-6}}, {"potential_energy", {1e-9, 1e-6}}, {"max_stretch", {1e-9, 1e-6}},
+      {"min_distance_obstacle", {1e-7, 1e-6}}, {"obstacle_contacts", {2, 0.05}}, {"solver_warnings", {0, 0}},
+      {"penetrations", {0, 0}},    {"fail_safes", {0, 0}}};
+  for (const StatsColumn& column : stats_columns()) {
+    const std::string name = column.name;
     const auto listed = stats_tolerances().find(name);
     const ColumnTolerance used = listed != stats_tolerances().end() ? listed->second : default_tolerance();
-    EXPECT_EQ(used.ignore, c.tolerance.ignore) << name;
-    EXPECT_EQ(used.absolute, c.tolerance.absolute) << name;
-    EXPECT_EQ(used.relative, c.tolerance.relative) << name;
+    const bool timing = name.size() > 3 && name.substr(name.size() - 3) == "_ms";
+    EXPECT_EQ(used.ignore, timing) << name;
+    if (timing) continue;
+    const auto before = earlier.find(name);
+    const std::pair<double, double> expected_tolerance = before != earlier.end() ? before->second : std::pair{1e-9, 1e-6};
+    EXPECT_EQ(used.absolute, expected_tolerance.first) << name;
+    EXPECT_EQ(used.relative, expected_tolerance.second) << name;
   }
 }

@@ -68,8 +68,8 @@ struct ProjectiveContacts;
 /// CHOLMOD keeps); for the projective solver, its factorisations.
 class Integrator {
  public:
-  /// The scene's solver; threads: for the collision pipeline's narrow phase (results do not
-  /// depend on it).
+  /// The scene's solver; threads: for the collision pipeline's narrow phase and feature pairs
+  /// and the projective solver's passes (results do not depend on it).
   explicit Integrator(const Model& model, int threads = 1);
   ~Integrator();
   /// One step of the scene's timestep: forces -> implicit solve -> analytic obstacles ->

@@ -44,7 +44,7 @@ struct RunSettings {
   std::filesystem::path out;  ///< output folder (created)
   int frames = 0;             ///< frames to simulate after frame 0 (the initial state)
   bool write_meshes = true;
-  int threads = 1;            ///< collision narrow-phase threads
+  int threads = 1;            ///< threads of the narrow phase and the projective solver (results do not depend on it)
   bool check_penetrations = false;  ///< run the independent intersection check on every frame
   bool overwrite = false;     ///< replace an earlier run's files in out (else refuse)
 };
