@@ -121,6 +121,9 @@ class ProjectiveSolver {
   // The step's objective at x (every vertex), the local step's right-hand side into sums_,
   // and when asked its gradient over the free vertices.
   Scalar evaluate(const std::vector<Vec3>& x, Block* gradient);
+  // The step's contacts made ready: weights, the shapes posed, the gaps kept, the mesh
+  // contacts' bounds (projective_contacts.cpp).
+  void prepare_contacts(const ProjectiveContacts& contacts);
   // The held contacts' part of the objective at x, their gradient added to gradient when
   // given; with impulses, each vertex's normal impulse into contact_impulse_ and the work into
   // contact_work_.
