@@ -581,7 +581,6 @@ bool Integrator::solve_projective(State& state, const std::vector<Vec3>& pinned_
     contacts.analytic = std::any_of(m.obstacles.begin(), m.obstacles.end(),
                                     [](const Obstacle& o) { return o.spec.kind != ObstacleSpec::Kind::Mesh; });
     contacts.t_end = state.time + h;
-    contacts.thickness = m.scene.collisions.thickness;
     contacts.margin = HELD_GAP * m.scene.collisions.thickness;
     for (const SolveContact& c : w.contacts)
       if (!c.analytic) contacts.mesh.push_back(c);
@@ -597,7 +596,7 @@ bool Integrator::solve_projective(State& state, const std::vector<Vec3>& pinned_
   if (!iterate_projective(state.positions, positions, report, "the projective solver failed: ", nullptr, &contacts))
     return false;
   // The normal forces, for the next step's friction; the contacts' work, for the ledger.
-  w.normal_force.assign(n, 0);
+  w.normal_force.resize(n);
   for (std::size_t v = 0; v < n; ++v) w.normal_force[v] = projective_->contact_impulses()[v] / h;
   w.contact_work = projective_->contact_work();
   for (std::size_t v = 0; v < n; ++v)

@@ -20,7 +20,7 @@ class CholmodSolver final : public LinearSolver {
     matrix_ = &A;
     const bool skip = skip_ > 0;
     if (skip) --skip_;
-    if (stale_iterations_ > 0 && fresh_ && same_pattern(A) && !skip) {
+    if (stale_iterations_ > 0 && fresh_ && factor_.same_pattern(A) && !skip) {
       // The factorisation of an earlier matrix as the preconditioner of a conjugate gradient:
       // refactorised only when that takes more than stale_iterations_. After a failure the
       // next 1, 2, 4, 4, ... solves factorise at once (the matrix is changing fast: a swing,
@@ -32,27 +32,15 @@ class CholmodSolver final : public LinearSolver {
       backoff_ = std::min(std::max(1, 2 * backoff_), MAX_BACKOFF);
       skip_ = backoff_;
     }
-    if (!factor_.factorise(A)) {
-      fresh_ = false;
-      report.ok = false;
-      report.error = "CHOLMOD could not factorise the system matrix (not positive definite)";
-      return report;
-    }
-    remember(A);
-    fresh_ = true;
-    stale_ = false;
+    fresh_ = factorise(A, report);
+    if (!fresh_) return report;
     return solve_again(b, x);
   }
   SolveReport solve_again(const VectorX& b, VectorX& x) override {
     SolveReport report;
     if (stale_) {
       if (preconditioned(*matrix_, b, x, report)) return report;
-      if (!factor_.factorise(*matrix_)) {
-        report.ok = false;
-        report.error = "CHOLMOD could not factorise the system matrix (not positive definite)";
-        return report;
-      }
-      stale_ = false;
+      if (!factorise(*matrix_, report)) return report;
     }
     report.iterations = 1;
     if (!factor_.solve(b, x)) {
@@ -65,10 +53,14 @@ class CholmodSolver final : public LinearSolver {
   int factorisations() const override { return factor_.factorisations(); }
 
  private:
-  bool same_pattern(const SparseMatrix& A) const {
-    return A.rows() == rows_ && A.nonZeros() == nonzeros_;
+  // A factorised afresh (no longer stale); false, with report saying why, when it fails.
+  bool factorise(const SparseMatrix& A, SolveReport& report) {
+    stale_ = false;
+    if (factor_.factorise(A)) return true;
+    report.ok = false;
+    report.error = "CHOLMOD could not factorise the system matrix (not positive definite)";
+    return false;
   }
-  void remember(const SparseMatrix& A) { rows_ = A.rows(), nonzeros_ = A.nonZeros(); }
   // Conjugate gradient on A x = b preconditioned by the kept factorisation (of an earlier
   // matrix with the same pattern) until the preconditioned residual r' P^-1 r, which tracks
   // the error in A's norm, is STALE_TOLERANCE^2 of b' P^-1 b; false when that takes more than
@@ -104,7 +96,6 @@ class CholmodSolver final : public LinearSolver {
   bool fresh_ = false;   // a factorisation exists
   bool stale_ = false;   // the last solve's matrix is not the factorised one
   const SparseMatrix* matrix_ = nullptr;
-  Eigen::Index rows_ = 0, nonzeros_ = 0;
   VectorX r_, z_, p_, q_;
   Scalar rz_ = 0;
 };
@@ -167,6 +158,8 @@ CholmodFactor::CholmodFactor(Use use) : impl_(std::make_unique<Impl>()), use_(us
 CholmodFactor::~CholmodFactor() = default;
 CholmodFactor::CholmodFactor(CholmodFactor&&) noexcept = default;
 CholmodFactor& CholmodFactor::operator=(CholmodFactor&&) noexcept = default;
+
+bool CholmodFactor::same_pattern(const SparseMatrix& A) const { return impl_->same_pattern(A); }
 
 bool CholmodFactor::factorise(const SparseMatrix& A) {
   Impl& f = *impl_;

@@ -1,6 +1,7 @@
 #include "drape/core/obstacle.h"
 
 #include <limits>
+#include <tuple>
 
 #include "drape/ccd/distance.h"
 
@@ -12,21 +13,17 @@ Vec3 body_velocity(const Motion& motion, const Vec3& x_now, Scalar t) {
   return motion.velocity + motion.angular_velocity.cross(x_now - centre_now);
 }
 
-SurfaceContact analytic_contact(const Obstacle& obstacle, Scalar t, const Vec3& x) {
+PosedShape pose_shape(const Obstacle& obstacle, Scalar t) {
   const ObstacleSpec& s = obstacle.spec;
+  if (s.kind == ObstacleSpec::Kind::Sphere) return {&obstacle, true, s.motion.position(s.center, t), Vec3::UnitZ(), s.radius};
+  const Vec3 point = s.motion.position(s.point, t);
+  return {&obstacle, false, point, (s.motion.position(s.point + s.normal, t) - point).normalized(), 0};
+}
+
+SurfaceContact analytic_contact(const Obstacle& obstacle, Scalar t, const Vec3& x) {
   SurfaceContact out;
-  if (s.kind == ObstacleSpec::Kind::Sphere) {
-    const Vec3 centre = s.motion.position(s.center, t);
-    const Vec3 offset = x - centre;
-    const Scalar length = offset.norm();
-    out.normal = length > 0 ? Vec3(offset / length) : Vec3::UnitZ();
-    out.signed_distance = length - s.radius;
-  } else {
-    const Vec3 point = s.motion.position(s.point, t);
-    out.normal = (s.motion.position(s.point + s.normal, t) - point).normalized();
-    out.signed_distance = out.normal.dot(x - point);
-  }
-  out.surface_velocity = body_velocity(s.motion, x - out.signed_distance * out.normal, t);
+  std::tie(out.signed_distance, out.normal) = pose_shape(obstacle, t).distance(x);
+  out.surface_velocity = body_velocity(obstacle.spec.motion, x - out.signed_distance * out.normal, t);
   return out;
 }
 

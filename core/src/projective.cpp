@@ -154,7 +154,6 @@ bool ProjectiveSolver::solve(const ProjectiveStep& step, std::vector<Vec3>& posi
   }
 
   step_ = {sys, factor, &step, held};
-  iterations_done_ = 0;
   contact_impulse_.assign(positions.size(), 0);
   contact_work_ = 0;
   shapes_.clear();
@@ -289,7 +288,6 @@ bool ProjectiveSolver::local_global(std::vector<Vec3>& positions, std::string& e
   best_ = positions;
   Scalar omega = 1, best_objective = std::numeric_limits<Scalar>::infinity();
   int accelerated = 0;  // global steps since the acceleration (re)started
-  iterations_done_ = 0;
   for (int pass = 0; pass <= iterations_; ++pass) {
     const Scalar objective = evaluate(positions, nullptr);
     if (objective < best_objective) {
@@ -341,7 +339,6 @@ bool ProjectiveSolver::quasi_newton(std::vector<Vec3>& positions, std::string& e
   history_rho_.assign(std::size_t(memory), 0);
   std::vector<Scalar> alpha(static_cast<std::size_t>(memory), 0.0);
   int stored = 0, newest = -1;  // the history is a ring
-  iterations_done_ = 0;
   const auto leave_out_fixed = [&](Block& rows) {
     for (int a = 0; a < free_count_; ++a)
       if (fixed_[std::size_t(a)]) rows.row(a).setZero();

@@ -30,6 +30,7 @@
 
 #include "drape/core/collision.h"
 #include "drape/core/linear_solver.h"
+#include "drape/core/obstacle.h"
 #include "drape/core/model.h"
 
 namespace drape {
@@ -52,7 +53,6 @@ struct FrictionContact {
 struct ProjectiveContacts {
   bool analytic = false;  ///< hold the spheres and planes
   Scalar t_end = 0;       ///< s: where they are
-  Scalar thickness = 0;   ///< m
   Scalar margin = 0;      ///< m, at least the thickness
   std::vector<SolveContact> mesh;  ///< mesh contacts only (SolveContact::analytic false)
   std::vector<FrictionContact> friction;
@@ -193,20 +193,6 @@ class ProjectiveSolver {
   std::vector<Scalar> contact_bound_, contact_stiffness_;  // per mesh contact: n . sum w x at least this; its weight
   std::vector<Scalar> vertex_stiffness_;                   // per free vertex: the analytic obstacles' weight
   std::vector<Scalar> contact_impulse_;                    // per vertex, N s
-  struct PosedShape {  // a sphere or plane at the step's end (as analytic_contact poses it)
-    const Obstacle* obstacle = nullptr;
-    bool sphere = false;
-    Vec3 point = Vec3::Zero();  // centre, or a point of the plane
-    Vec3 normal = Vec3::UnitZ();  // the plane's
-    Scalar radius = 0;
-    // The signed distance of x (positive outside) and the outward normal there.
-    std::pair<Scalar, Vec3> distance(const Vec3& x) const {
-      if (!sphere) return {normal.dot(x - point), normal};
-      const Vec3 offset = x - point;
-      const Scalar length = offset.norm();
-      return {length - radius, length > 0 ? Vec3(offset / length) : Vec3::UnitZ()};
-    }
-  };
   std::vector<PosedShape> shapes_;  // empty unless the step holds analytic contacts
   std::vector<Scalar> kept_gap_;    // per shape and free vertex (shape-major): the gap the solve keeps
   Scalar contact_work_ = 0;

@@ -21,21 +21,15 @@ void ProjectiveSolver::prepare_contacts(const ProjectiveContacts& c) {
     if (const int a = free_index_[v]; a >= 0) vertex_stiffness_[std::size_t(a)] = CONTACT_HOLD * m.masses[v];
   shapes_.clear();
   // Each sphere and plane posed at the step's end, and at its start for the gaps below.
-  const auto pose = [](const Obstacle& obstacle, Scalar t) {
-    const ObstacleSpec& o = obstacle.spec;
-    if (o.kind == ObstacleSpec::Kind::Sphere) return PosedShape{&obstacle, true, o.motion.position(o.center, t), Vec3::UnitZ(), o.radius};
-    const Vec3 point = o.motion.position(o.point, t);
-    return PosedShape{&obstacle, false, point, (o.motion.position(o.point + o.normal, t) - point).normalized(), 0};
-  };
   if (c.analytic)
     for (const Obstacle& obstacle : m.obstacles)
-      if (obstacle.spec.kind != ObstacleSpec::Kind::Mesh) shapes_.push_back(pose(obstacle, c.t_end));
+      if (obstacle.spec.kind != ObstacleSpec::Kind::Mesh) shapes_.push_back(pose_shape(obstacle, c.t_end));
   // The gap each free vertex keeps from each: its distance at the step's start, at most the
   // margin (one that starts within the thickness is pushed out by the response, which moves
   // it without giving it speed).
   kept_gap_.resize(shapes_.size() * std::size_t(free_count_));
   for (std::size_t k = 0; k < shapes_.size(); ++k) {
-    const PosedShape at_start = pose(*shapes_[k].obstacle, c.t_end - h);
+    const PosedShape at_start = pose_shape(*shapes_[k].obstacle, c.t_end - h);
     for (std::size_t v = 0; v < x0.size(); ++v)
       if (const int a = free_index_[v]; a >= 0)
         kept_gap_[k * std::size_t(free_count_) + std::size_t(a)] = std::min(at_start.distance(x0[v]).first, c.margin);

@@ -80,25 +80,24 @@ const std::vector<StatsColumn>& stats_columns() {
   return columns;
 }
 
-std::string stats_header() {
-  std::string header;
+namespace {
+
+// One cell a column, comma-separated.
+template <typename Cell>
+std::string csv_line(Cell cell) {
+  std::string line;
   for (const StatsColumn& c : stats_columns()) {
-    if (!header.empty()) header += ',';
-    header += c.name;
+    if (&c != &stats_columns().front()) line += ',';
+    line += cell(c);
   }
-  return header;
+  return line;
 }
 
-std::string stats_row(const FrameStats& s) {
-  std::string row;
-  bool first = true;
-  for (const StatsColumn& c : stats_columns()) {
-    if (!first) row += ',';
-    row += c.value(s);
-    first = false;
-  }
-  return row;
-}
+}  // namespace
+
+std::string stats_header() { return csv_line([](const StatsColumn& c) { return std::string(c.name); }); }
+
+std::string stats_row(const FrameStats& s) { return csv_line([&](const StatsColumn& c) { return c.value(s); }); }
 
 std::filesystem::path mesh_path(const std::filesystem::path& out, int frame, const std::string& format) {
   char name[64];

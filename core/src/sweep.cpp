@@ -76,7 +76,7 @@ SolverSpec parse_solver_setting(const std::string& text, const SolverSpec& scene
   }
   // A setting of another type than the scene's starts from that type's defaults.
   if (text == "cg" || text.rfind("cg:", 0) == 0) {
-    if (spec.kind != SolverKind::ConjugateGradient) spec.tolerance = CG_TOLERANCE;
+    if (spec.kind != SolverKind::ConjugateGradient) spec.tolerance = default_tolerance(SolverKind::ConjugateGradient);
     spec.kind = SolverKind::ConjugateGradient;
     if (text != "cg") {
       const auto tolerance = whole_number(text.substr(3));
@@ -87,7 +87,7 @@ SolverSpec parse_solver_setting(const std::string& text, const SolverSpec& scene
     return spec;
   }
   if (text == "projective" || text.rfind("projective:", 0) == 0) {
-    if (spec.kind != SolverKind::Projective) spec.tolerance = PROJECTIVE_TOLERANCE;
+    if (spec.kind != SolverKind::Projective) spec.tolerance = default_tolerance(SolverKind::Projective);
     spec.kind = SolverKind::Projective;
     const std::string expected =
         "': expected projective or projective:NAME=VALUE[:NAME=VALUE...] with iterations from 1 to " +

@@ -58,6 +58,8 @@ class CholmodFactor {
   CholmodFactor& operator=(CholmodFactor&&) noexcept;
   /// Factorises A (both triangles stored); false when A is not positive definite.
   bool factorise(const SparseMatrix& A);
+  /// Whether A has the sparsity pattern of the last matrix analysed.
+  bool same_pattern(const SparseMatrix& A) const;
   /// X = A^-1 B for every column of B; false when the solve failed or gave a non-finite X.
   bool solve(const Eigen::Matrix<Scalar, Eigen::Dynamic, 3>& B, Eigen::Matrix<Scalar, Eigen::Dynamic, 3>& X) const;
   /// X = A^-1 b.

@@ -4,6 +4,7 @@
 /// how fast their surface moves.
 
 #include <optional>
+#include <utility>
 
 #include "drape/core/model.h"
 
@@ -15,6 +16,25 @@ struct SurfaceContact {
   Vec3 normal = Vec3::UnitZ();       ///< unit, pointing to the free side
   Vec3 surface_velocity = Vec3::Zero();
 };
+
+/// A sphere or plane posed at one time: many points' distances without posing it again.
+struct PosedShape {
+  const Obstacle* obstacle = nullptr;
+  bool sphere = false;
+  Vec3 point = Vec3::Zero();    ///< the centre, or a point of the plane
+  Vec3 normal = Vec3::UnitZ();  ///< the plane's (unit, to the free side)
+  Scalar radius = 0;
+  /// The signed distance of x (positive on the free side) and the unit normal there.
+  std::pair<Scalar, Vec3> distance(const Vec3& x) const {
+    if (!sphere) return {normal.dot(x - point), normal};
+    const Vec3 offset = x - point;
+    const Scalar length = offset.norm();
+    return {length - radius, length > 0 ? Vec3(offset / length) : Vec3::UnitZ()};
+  }
+};
+
+/// Sphere or plane (not a mesh) at time t.
+PosedShape pose_shape(const Obstacle& obstacle, Scalar t);
 
 /// Sphere or plane at time t, seen from x.
 SurfaceContact analytic_contact(const Obstacle& obstacle, Scalar t, const Vec3& x);
