@@ -54,6 +54,7 @@ struct Integrator::Workspace {
     std::array<int, 3> ij{-1, -1, -1}, ji{-1, -1, -1};
   };
   std::vector<SpringBlocks> spring_blocks;
+  std::vector<std::array<std::array<std::array<int, 3>, 4>, 4>> hinge_blocks;  // [hinge][i][j]: block (v_i, v_j)
   VectorX rhs, solution;
   std::vector<Vec3> forces;
   // The projective step's start velocities and explicit forces (gravity, wind), kept for the
@@ -124,6 +125,12 @@ Integrator::Integrator(const Model& model, int threads) : model_(model), work_(s
     const int a = w.free_index[s.i], b = w.free_index[s.j];
     if (a >= 0 && b >= 0) add_pattern(a, b), add_pattern(b, a);
   }
+  for (const Hinge& hinge : model.hinges)
+    for (std::size_t i = 0; i < 4; ++i)
+      for (std::size_t j = 0; j < 4; ++j) {
+        const int a = w.free_index[std::size_t(hinge.v[i])], b = w.free_index[std::size_t(hinge.v[j])];
+        if (a >= 0 && b >= 0 && hinge.k[i] != 0 && hinge.k[j] != 0) add_pattern(a, b);
+      }
   w.matrix.resize(3 * w.free_count, 3 * w.free_count);
   w.matrix.setFromTriplets(pattern.begin(), pattern.end());
   w.matrix.makeCompressed();
@@ -134,6 +141,13 @@ Integrator::Integrator(const Model& model, int threads) : model_(model), work_(s
     const int a = w.free_index[model.springs[k].i], b = w.free_index[model.springs[k].j];
     if (a >= 0 && b >= 0) w.spring_blocks[k] = {w.block(a, b), w.block(b, a)};
   }
+  w.hinge_blocks.resize(model.hinges.size());
+  for (std::size_t k = 0; k < model.hinges.size(); ++k)
+    for (std::size_t i = 0; i < 4; ++i)
+      for (std::size_t j = 0; j < 4; ++j) {
+        const int a = w.free_index[model.hinges[k].v[i]], b = w.free_index[model.hinges[k].v[j]];
+        if (a >= 0 && b >= 0 && model.hinges[k].k[i] != 0 && model.hinges[k].k[j] != 0) w.hinge_blocks[k][i][j] = w.block(a, b);
+      }
   w.rhs.setZero(3 * w.free_count);
   w.solution.setZero(3 * w.free_count);
 }
@@ -340,6 +354,29 @@ void Integrator::assemble(const std::vector<Vec3>& x, const std::vector<Vec3>& v
       (*coupling)[s.i] -= diagonal_block * (*pinned_dv)[s.j];
     } else if (coupling && b >= 0) {
       (*coupling)[s.j] -= diagonal_block * (*pinned_dv)[s.i];
+    }
+  }
+  // The bending hinges: F_i = -k_i (u + c du/dt) with u = sum k_j x_j, so -dF_i/dx_j = k_i k_j I
+  // and -dF_i/dv_j = c k_i k_j I, constant (Hinge).
+  for (std::size_t k = 0; k < m.hinges.size(); ++k) {
+    const Hinge& hinge = m.hinges[k];
+    const Vec3 du = hinge_vector(hinge, v), pull = hinge_pull(hinge, x, v);
+    const Scalar weight = h * hinge.damping + h * h;  // A's (i, j) block over k_i k_j
+    for (int i = 0; i < 4; ++i) {
+      const int vi = hinge.v[std::size_t(i)];
+      const Scalar ki = hinge.k[std::size_t(i)];
+      if (ki == 0) continue;
+      forces[std::size_t(vi)] -= ki * pull;
+      if (stiffness_times_v) (*stiffness_times_v)[std::size_t(vi)] -= ki * du;
+      const int a = w.free_index[std::size_t(vi)];
+      if (a < 0) continue;
+      for (int j = 0; j < 4; ++j) {
+        const int vj = hinge.v[std::size_t(j)];
+        const Scalar block = weight * ki * hinge.k[std::size_t(j)];
+        if (block == 0) continue;
+        if (w.free_index[std::size_t(vj)] >= 0) w.add_block(w.hinge_blocks[k][std::size_t(i)][std::size_t(j)], block * Mat3::Identity());
+        else if (coupling) (*coupling)[std::size_t(vi)] += block * (*pinned_dv)[std::size_t(vj)];
+      }
     }
   }
 }
@@ -565,6 +602,12 @@ bool Integrator::solve_projective(State& state, const std::vector<Vec3>& pinned_
                                                  state.velocities[s.j], s.rest_length, s.stiffness, s.damping);
       w.forces[s.i] += e.force;
       w.forces[s.j] -= e.force;
+    }
+  if (!m.pins.empty())
+    for (const Hinge& hinge : m.hinges) {
+      for (std::size_t i = 0; i < 4; ++i)
+        if (m.pin_of_vertex[std::size_t(hinge.v[i])] >= 0)
+          w.forces[std::size_t(hinge.v[i])] += hinge_force(hinge, i, state.positions, state.velocities);
     }
   // First guess: the inertial prediction y (the free vertices), the prescribed end (the pinned
   // ones); in free fall it is the answer, which the acceleration then keeps.
@@ -807,6 +850,7 @@ Scalar potential_energy(const Model& model, const State& state) {
     const Scalar stretch = (state.positions[s.i] - state.positions[s.j]).norm() - s.rest_length;
     e += 0.5 * s.stiffness * stretch * stretch;
   }
+  for (const Hinge& hinge : model.hinges) e += 0.5 * hinge_vector(hinge, state.positions).squaredNorm();
   for (std::size_t v = 0; v < state.positions.size(); ++v) e -= model.masses[v] * model.scene.gravity.dot(state.positions[v]);
   return e;
 }

@@ -27,7 +27,7 @@ std::vector<Edge> mesh_edges(const TriangleMesh& mesh) {
   return edges;
 }
 
-std::vector<Edge> bending_pairs(const TriangleMesh& mesh) {
+std::vector<std::array<int, 4>> hinges(const TriangleMesh& mesh) {
   // Edge -> the opposite vertices of the triangles sharing it.
   std::map<Edge, std::vector<int>> opposite;
   std::vector<Edge> order;
@@ -39,11 +39,17 @@ std::vector<Edge> bending_pairs(const TriangleMesh& mesh) {
       list.push_back(t[(k + 2) % 3]);
     }
   }
-  std::vector<Edge> pairs;
+  std::vector<std::array<int, 4>> found;
   for (const Edge& e : order) {
     const auto& list = opposite[e];
-    if (list.size() == 2 && list[0] != list[1]) pairs.push_back(make_edge(list[0], list[1]));
+    if (list.size() == 2 && list[0] != list[1]) found.push_back({e[0], e[1], list[0], list[1]});
   }
+  return found;
+}
+
+std::vector<Edge> bending_pairs(const TriangleMesh& mesh) {
+  std::vector<Edge> pairs;
+  for (const auto& h : hinges(mesh)) pairs.push_back(make_edge(h[2], h[3]));
   return pairs;
 }
 

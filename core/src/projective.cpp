@@ -69,6 +69,15 @@ ProjectiveSolver::System* ProjectiveSolver::system(Scalar h, std::string& error)
     if (b >= 0) entries.emplace_back(b, b, weight);
     if (a >= 0 && b >= 0) entries.emplace_back(a, b, -weight), entries.emplace_back(b, a, -weight);
   }
+  // The bending hinges' energy is quadratic already: (h^2 + h c) k k^T, exactly.
+  for (const Hinge& hinge : m.hinges) {
+    const Scalar weight = h * h + h * hinge.damping;
+    for (std::size_t i = 0; i < 4; ++i)
+      for (std::size_t j = 0; j < 4; ++j) {
+        const int a = free_index_[std::size_t(hinge.v[i])], b = free_index_[std::size_t(hinge.v[j])];
+        if (a >= 0 && b >= 0 && hinge.k[i] != 0 && hinge.k[j] != 0) entries.emplace_back(a, b, weight * hinge.k[i] * hinge.k[j]);
+      }
+  }
   System sys;
   sys.springs.reserve(m.springs.size());
   for (const Spring& s : m.springs)
@@ -242,6 +251,24 @@ Scalar ProjectiveSolver::evaluate(const std::vector<Vec3>& x, Block* gradient) {
       const Scalar weight = s.elastic + s.viscous;
       if (s.a >= 0) sums_[std::size_t(s.a)] += s.b >= 0 ? target : Vec3(target + weight * x[std::size_t(s.j)]);
       if (s.b >= 0) sums_[std::size_t(s.b)] += s.a >= 0 ? Vec3(-target) : Vec3(weight * x[std::size_t(s.i)] - target);
+    }
+  }
+  // The bending hinges (Hinge): h^2 |u|^2 / 2 and the damping's (h c / 2) |u - u0|^2, in the
+  // model's order (the same bits for any thread count); local-global's right-hand side gets
+  // what the matrix's part of them does not hold: the pinned corners and the damping's u0.
+  for (const Hinge& hinge : m.hinges) {
+    const Vec3 u = hinge_vector(hinge, x), u0 = hinge_vector(hinge, x0);
+    const Scalar elastic = h * h, viscous = h * hinge.damping;
+    total += 0.5 * elastic * u.squaredNorm() + 0.5 * viscous * (u - u0).squaredNorm();
+    const Vec3 pull = elastic * u + viscous * (u - u0);
+    Vec3 held_part = Vec3::Zero();  // the pinned corners' share of u
+    for (std::size_t i = 0; i < 4; ++i)
+      if (free_index_[std::size_t(hinge.v[i])] < 0) held_part += hinge.k[i] * x[std::size_t(hinge.v[i])];
+    for (std::size_t i = 0; i < 4; ++i) {
+      const int a = free_index_[std::size_t(hinge.v[i])];
+      if (a < 0) continue;
+      if (gradient) gradient_rows_[std::size_t(a)] += hinge.k[i] * pull;
+      else sums_[std::size_t(a)] += hinge.k[i] * (viscous * u0 - (elastic + viscous) * held_part);
     }
   }
   // The held vertices' penalty (local-global's spread).

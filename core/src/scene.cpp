@@ -240,11 +240,14 @@ ClothSpec read_cloth(const Node& n) {
   if (n.has("render")) c.render_json = render_section(n.at("render"));
   if (n.has("material")) {
     const Node m = n.at("material");
-    m.allow({"density", "stretch", "shear", "bend", "damping", "air_damping"});
+    m.allow({"density", "stretch", "shear", "bend", "bending_rigidity", "damping", "air_damping"});
+    if (m.has("bend") && m.has("bending_rigidity"))
+      m.at("bending_rigidity").fail("expected one bending model: `bend` (springs) or `bending_rigidity` (N m, hinges), not both");
     if (m.has("density")) c.material.density = m.at("density").positive();
     if (m.has("stretch")) c.material.stretch = m.at("stretch").non_negative();
     if (m.has("shear")) c.material.shear = m.at("shear").non_negative();
     if (m.has("bend")) c.material.bend = m.at("bend").non_negative();
+    if (m.has("bending_rigidity")) c.material.bending_rigidity = m.at("bending_rigidity").non_negative();
     if (m.has("damping")) c.material.damping = m.at("damping").non_negative();
     if (m.has("air_damping")) c.material.air_damping = m.at("air_damping").non_negative();
   }

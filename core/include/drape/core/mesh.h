@@ -26,6 +26,10 @@ std::vector<Edge> mesh_edges(const TriangleMesh& mesh);
 /// the ends of a bending spring.
 std::vector<Edge> bending_pairs(const TriangleMesh& mesh);
 
+/// Each interior edge (shared by exactly two triangles with distinct third corners) as the
+/// edge's two vertices and then the two opposite corners, in the order of first appearance.
+std::vector<std::array<int, 4>> hinges(const TriangleMesh& mesh);
+
 /// What is wrong with a mesh as a simulation input, or "" when nothing is: no triangles, an
 /// index out of range, a triangle repeating a vertex, a zero-area triangle (relative to the
 /// mesh size), an edge shared by more than two triangles (non-manifold), a non-finite coordinate.

@@ -4,6 +4,7 @@
 /// scene (meshes loaded and validated, springs, masses, handles, obstacles). The state that
 /// changes lives in State; a step is step(const Model&, State&, ...).
 
+#include <array>
 #include <memory>
 #include <vector>
 
@@ -22,6 +23,40 @@ struct Spring {
   Scalar damping = 0;     ///< N s/m
   SpringKind kind = SpringKind::Stretch;
 };
+
+/// One hinge of the quadratic bending model (Bergou, Wardetzky, Harmon, Zorin and Grinspun, "A
+/// quadratic bending model for inextensible surfaces", SGP 2006): an interior edge (vertices
+/// v[0], v[1]) and the corners opposite it (v[2], v[3]). Its energy is 1/2 |u|^2 with u =
+/// sum k_i x_i, the weights k from the rest triangles' cotangents times sqrt(B / (A1 + A2))
+/// (B the bending rigidity, A1 and A2 their areas), so that a cloth bent into a cylinder of
+/// curvature c stores B c^2 / 2 a square metre. u is zero for every rigid motion and every
+/// affine image of the rest hinge (uniform stretch, compression or shear in its plane): the
+/// model resists bending, not in-plane compression. The force on x_i is -k_i (u + damping
+/// du/dt); both are linear in the positions, so the stiffness matrix is constant.
+struct Hinge {
+  std::array<int, 4> v{};    ///< global vertex indices
+  std::array<Scalar, 4> k{};  ///< sqrt(N m) / m
+  Scalar damping = 0;         ///< s: the material's damping time
+};
+
+/// A hinge's u = sum k_i x_i for the vertices' positions (or, of their velocities, du/dt).
+inline Vec3 hinge_vector(const Hinge& hinge, const std::vector<Vec3>& x) {
+  Vec3 u = Vec3::Zero();
+  for (std::size_t i = 0; i < 4; ++i) u += hinge.k[i] * x[std::size_t(hinge.v[i])];
+  return u;
+}
+
+/// A hinge's u + damping du/dt at positions x and velocities v: its force on corner i is -k_i
+/// times it (hinge_force).
+inline Vec3 hinge_pull(const Hinge& hinge, const std::vector<Vec3>& x, const std::vector<Vec3>& v) {
+  return hinge_vector(hinge, x) + hinge.damping * hinge_vector(hinge, v);
+}
+
+/// A hinge's force on its corner i at positions x and velocities v: -k_i (u + damping du/dt).
+/// Its Jacobians are constant: dF_i/dx_j = -k_i k_j I and dF_i/dv_j = -damping k_i k_j I.
+inline Vec3 hinge_force(const Hinge& hinge, std::size_t i, const std::vector<Vec3>& x, const std::vector<Vec3>& v) {
+  return -hinge.k[i] * hinge_pull(hinge, x, v);
+}
 
 /// The vertices and triangles of one cloth within the global arrays.
 struct ClothRange {
@@ -49,6 +84,7 @@ struct Model {
   std::vector<Triangle> triangles;      ///< global vertex indices
   std::vector<ClothRange> cloths;
   std::vector<Spring> springs;          ///< only kinds with nonzero stiffness
+  std::vector<Hinge> hinges;            ///< cloths with a bending rigidity only
   std::vector<Pin> pins;
   std::vector<int> pin_of_vertex;       ///< index into pins, or -1 for a free vertex
   std::vector<Obstacle> obstacles;

@@ -79,6 +79,10 @@ struct Material {
   Scalar stretch = 2000;   ///< N: structural springs (grid axes; every edge of an imported mesh)
   Scalar shear = 200;      ///< N: both diagonals of each grid quad (grids only)
   Scalar bend = 2;         ///< N: springs across one vertex (grids) or across each interior edge
+  /// N m: the fabric's bending rigidity (moment per unit width over curvature, as Kawabata's
+  /// and the cantilever test's); above zero it selects the hinge bending model (Model::hinges)
+  /// instead of the bending springs.
+  Scalar bending_rigidity = 0;
   Scalar damping = 0.002;  ///< s: each spring's damping is this times its stiffness
   /// 1/s: still air's drag on each particle, -air_damping m (v - wind velocity); it is what
   /// brings a swinging cloth to rest (spring damping does not damp rigid swinging).
