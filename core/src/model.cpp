@@ -6,6 +6,7 @@
 #include <cmath>
 #include <cstdio>
 #include <fstream>
+#include <map>
 #include <sstream>
 
 #include "drape/core/mesh_io.h"
@@ -46,6 +47,66 @@ void add_springs(Model& model, const std::vector<Edge>& edges, int offset, Scala
 // cot(e0, e1) + cot(e0, e2), -cot(e0, e1) - cot(-e0, e3), -cot(e0, e2) - cot(-e0, e4)) (Bergou et
 // al. 2006, section 4) times sqrt(B / (A1 + A2)). The factor is this model's calibration: a grid
 // bent into a cylinder stores B c^2 / 2 a square metre away from its ends (Bending tests).
+// The springs of a fabric's tensile stiffness T and shear stiffness G (N/m) on a grid of a x b
+// cells: axis springs kx (along a) and ky, and both diagonals kd, whose network has the
+// stiffness C11 = kx a / b + G a^2 / b^2, C22 = ky b / a + G b^2 / a^2, C12 = C66 = 2 kd a b / d^2
+// (d^2 = a^2 + b^2; the springs' strain energy over a cell's area). So kd = G d^2 / (2 a b),
+// and C11 = C22 = s with s - G^2 / s = T (a strip free to narrow stretches by T per unit width):
+// s = (T + sqrt(T^2 + 4 G^2)) / 2. An axis spring on the cloth's border serves one cell, not
+// two: half of it. Refused (with why) where the cells are too elongated for G.
+void add_fabric_grid_springs(Model& model, const GridMesh& grid, int offset, const Material& m, const Scene& scene,
+                             const std::string& path) {
+  const int nx = grid.spec.resolution[0], ny = grid.spec.resolution[1];
+  const auto at = [&](int i, int j) { return model.initial_positions[std::size_t(grid.index(i, j) + offset)]; };
+  const Scalar a = (at(1, 0) - at(0, 0)).norm(), b = (at(0, 1) - at(0, 0)).norm(), d2 = a * a + b * b;
+  const Scalar T = m.tensile_stiffness, G = m.shear_stiffness;
+  const Scalar s = 0.5 * (T + std::sqrt(T * T + 4 * G * G));
+  const Scalar kx = s * b / a - G * a / b, ky = s * a / b - G * b / a, kd = G * d2 / (2 * a * b);
+  if (!(kx > 0 && ky > 0)) {
+    std::ostringstream what;
+    what << "the grid's quads (" << a << " x " << b << " m) are too elongated for a shear stiffness of " << G
+         << " N/m with a tensile stiffness of " << T << " N/m (their axis springs would need a negative constant); "
+         << "expected quads closer to square or a lower shear stiffness";
+    fail(scene, path + "/material/shear_stiffness", what.str());
+  }
+  const auto add = [&](int i0, int j0, int i1, int j1, Scalar k, SpringKind kind) {
+    const int u = grid.index(i0, j0) + offset, v = grid.index(i1, j1) + offset;
+    const Scalar rest = (model.initial_positions[std::size_t(u)] - model.initial_positions[std::size_t(v)]).norm();
+    model.springs.push_back({u, v, rest, k, m.damping * k, kind});
+  };
+  for (int j = 0; j <= ny; ++j)
+    for (int i = 0; i <= nx; ++i) {
+      if (i < nx) add(i, j, i + 1, j, (j == 0 || j == ny ? 0.5 : 1.0) * kx, SpringKind::Stretch);
+      if (j < ny) add(i, j, i, j + 1, (i == 0 || i == nx ? 0.5 : 1.0) * ky, SpringKind::Stretch);
+      if (i < nx && j < ny) {
+        add(i, j, i + 1, j + 1, kd, SpringKind::Shear);
+        add(i + 1, j, i, j + 1, kd, SpringKind::Shear);
+      }
+    }
+}
+
+// The edge springs of a fabric's tensile stiffness T on a triangle mesh: each edge gets T
+// times its triangles' area over its length squared (van Gelder, "Approximate simulation of
+// elastic membranes by triangulated spring meshes", 1998), which makes a mesh of equilateral
+// triangles an isotropic sheet of tensile stiffness T (Poisson's ratio 1/3, shear 3 T / 8).
+void add_fabric_mesh_springs(Model& model, const TriangleMesh& mesh, int offset, const Material& m) {
+  std::map<Edge, Scalar> area;
+  for (const Triangle& t : mesh.triangles) {
+    const Vec3& p = model.initial_positions[std::size_t(t[0] + offset)];
+    const Scalar a = 0.5 * (model.initial_positions[std::size_t(t[1] + offset)] - p)
+                               .cross(model.initial_positions[std::size_t(t[2] + offset)] - p)
+                               .norm();
+    for (int k = 0; k < 3; ++k) area[Edge{std::min(t[k], t[(k + 1) % 3]), std::max(t[k], t[(k + 1) % 3])}] += a;
+  }
+  for (const Edge& e : mesh_edges(mesh)) {
+    const int u = e[0] + offset, v = e[1] + offset;
+    const Scalar rest = (model.initial_positions[std::size_t(u)] - model.initial_positions[std::size_t(v)]).norm();
+    if (!(rest > 0)) continue;
+    const Scalar k = m.tensile_stiffness * area[e] / (rest * rest);
+    model.springs.push_back({u, v, rest, k, m.damping * k, SpringKind::Stretch});
+  }
+}
+
 constexpr Scalar ZERO_HINGE_WEIGHT = 1e-12;  // of a hinge's largest weight
 void add_hinges(Model& model, const TriangleMesh& mesh, int offset, Scalar rigidity, Scalar damping_time) {
   if (!(rigidity > 0)) return;  // a scene pays only for what it asks for
@@ -161,13 +222,19 @@ Model build_model(const Scene& scene) {
     const Material& m = spec.material;
     // A bending rigidity names the hinge model; the bending springs are the other.
     const Scalar bend_springs = m.bending_rigidity > 0 ? 0 : m.bend;
+    const bool fabric = m.tensile_stiffness > 0;  // the fabric's stiffnesses, or the springs'
     if (grid) {
       const GridSprings springs = grid_springs(*grid);
-      add_springs(model, springs.stretch, offset, m.stretch, m.damping, SpringKind::Stretch);
-      add_springs(model, springs.shear, offset, m.shear, m.damping, SpringKind::Shear);
+      if (fabric) {
+        add_fabric_grid_springs(model, *grid, offset, m, scene, path);
+      } else {
+        add_springs(model, springs.stretch, offset, m.stretch, m.damping, SpringKind::Stretch);
+        add_springs(model, springs.shear, offset, m.shear, m.damping, SpringKind::Shear);
+      }
       add_springs(model, springs.bend, offset, bend_springs, m.damping, SpringKind::Bend);
     } else {
-      add_springs(model, mesh_edges(mesh), offset, m.stretch, m.damping, SpringKind::Stretch);
+      if (fabric) add_fabric_mesh_springs(model, mesh, offset, m);
+      else add_springs(model, mesh_edges(mesh), offset, m.stretch, m.damping, SpringKind::Stretch);
       add_springs(model, bending_pairs(mesh), offset, bend_springs, m.damping, SpringKind::Bend);
     }
     if (grid) {

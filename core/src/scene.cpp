@@ -240,10 +240,25 @@ ClothSpec read_cloth(const Node& n) {
   if (n.has("render")) c.render_json = render_section(n.at("render"));
   if (n.has("material")) {
     const Node m = n.at("material");
-    m.allow({"density", "stretch", "shear", "bend", "bending_rigidity", "damping", "air_damping"});
+    m.allow({"density", "mass_per_area", "stretch", "tensile_stiffness", "shear", "shear_stiffness", "bend",
+             "bending_rigidity", "damping", "air_damping"});
+    // Each quantity in one form: the springs' (N, kg/m^2) or the fabric's (N/m, g/m^2).
+    for (const auto& [spring, fabric] : {std::pair{"density", "mass_per_area"}, std::pair{"stretch", "tensile_stiffness"},
+                                         std::pair{"shear", "shear_stiffness"}})
+      if (m.has(spring) && m.has(fabric))
+        m.at(fabric).fail(std::string("expected `") + spring + "` or `" + fabric + "`, not both");
+    if (!c.grid && m.has("shear_stiffness"))
+      m.at("shear_stiffness").fail("a mesh cloth's springs lie on its edges: its shear stiffness follows from "
+                                   "`tensile_stiffness` (3/8 of it, an isotropic sheet); expected that key alone");
+    if (c.grid && m.has("tensile_stiffness") != m.has("shear_stiffness"))
+      m.at(m.has("tensile_stiffness") ? "tensile_stiffness" : "shear_stiffness")
+          .fail("expected `tensile_stiffness` and `shear_stiffness` together (N/m): a grid's springs need both");
     if (m.has("bend") && m.has("bending_rigidity"))
       m.at("bending_rigidity").fail("expected one bending model: `bend` (springs) or `bending_rigidity` (N m, hinges), not both");
     if (m.has("density")) c.material.density = m.at("density").positive();
+    if (m.has("mass_per_area")) c.material.density = m.at("mass_per_area").positive() / 1000;  // g/m^2
+    if (m.has("tensile_stiffness")) c.material.tensile_stiffness = m.at("tensile_stiffness").positive();
+    if (m.has("shear_stiffness")) c.material.shear_stiffness = m.at("shear_stiffness").positive();
     if (m.has("stretch")) c.material.stretch = m.at("stretch").non_negative();
     if (m.has("shear")) c.material.shear = m.at("shear").non_negative();
     if (m.has("bend")) c.material.bend = m.at("bend").non_negative();

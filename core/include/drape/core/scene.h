@@ -72,8 +72,9 @@ struct Motion {
 };
 
 /// Per-cloth material. Spring constants follow from these and each spring's rest length L:
-/// k = stiffness / L, so a force is stiffness times strain and the cloth behaves alike at any
-/// resolution. A stiffness of zero creates no springs of that kind.
+/// k = stiffness / L, so a spring's force is stiffness times its strain (a finer grid puts more
+/// springs across the same width: its sheet is stiffer; the fabric keys below are not). A
+/// stiffness of zero creates no springs of that kind.
 struct Material {
   Scalar density = 0.15;   ///< kg per square metre of cloth
   Scalar stretch = 2000;   ///< N: structural springs (grid axes; every edge of an imported mesh)
@@ -87,6 +88,12 @@ struct Material {
   /// 1/s: still air's drag on each particle, -air_damping m (v - wind velocity); it is what
   /// brings a swinging cloth to rest (spring damping does not damp rigid swinging).
   Scalar air_damping = 0.1;
+  /// N/m: the fabric's tensile stiffness (force per unit width over strain in a strip test,
+  /// free to narrow) and shear stiffness (force per unit width over shear angle); above zero
+  /// they give the springs' constants from the cloth's geometry in place of `stretch` and
+  /// `shear` (fabric_springs in model.cpp), the same sheet at any resolution.
+  Scalar tensile_stiffness = 0;
+  Scalar shear_stiffness = 0;
 };
 
 struct ClothSpec {
