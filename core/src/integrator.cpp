@@ -142,6 +142,8 @@ Integrator::Integrator(const Model& model, int threads) : model_(model), work_(s
     if (a >= 0 && b >= 0) w.spring_blocks[k] = {w.block(a, b), w.block(b, a)};
   }
   w.hinge_blocks.resize(model.hinges.size());
+  for (auto& blocks : w.hinge_blocks)
+    for (auto& row : blocks) row.fill({-1, -1, -1});  // as the springs' unassembled pairs
   for (std::size_t k = 0; k < model.hinges.size(); ++k)
     for (std::size_t i = 0; i < 4; ++i)
       for (std::size_t j = 0; j < 4; ++j) {

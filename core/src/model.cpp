@@ -41,12 +41,6 @@ void add_springs(Model& model, const std::vector<Edge>& edges, int offset, Scala
   }
 }
 
-// The hinges of a cloth's interior edges for bending rigidity B (N m), from its rest positions
-// (Hinge): with e0 = x1 - x0, e1 = x2 - x0, e2 = x3 - x0, e3 = x2 - x1, e4 = x3 - x1 and cot(a, b)
-// the cotangent of the angle between a and b, the weights (cot(-e0, e3) + cot(-e0, e4),
-// cot(e0, e1) + cot(e0, e2), -cot(e0, e1) - cot(-e0, e3), -cot(e0, e2) - cot(-e0, e4)) (Bergou et
-// al. 2006, section 4) times sqrt(B / (A1 + A2)). The factor is this model's calibration: a grid
-// bent into a cylinder stores B c^2 / 2 a square metre away from its ends (Bending tests).
 // The springs of a fabric's tensile stiffness T and shear stiffness G (N/m) on a grid of a x b
 // cells: axis springs kx (along a) and ky, and both diagonals kd, whose network has the
 // stiffness C11 = kx a / b + G a^2 / b^2, C22 = ky b / a + G b^2 / a^2, C12 = C66 = 2 kd a b / d^2
@@ -107,8 +101,26 @@ void add_fabric_mesh_springs(Model& model, const TriangleMesh& mesh, int offset,
   }
 }
 
-constexpr Scalar ZERO_HINGE_WEIGHT = 1e-12;  // of a hinge's largest weight
-void add_hinges(Model& model, const TriangleMesh& mesh, int offset, Scalar rigidity, Scalar damping_time) {
+// A hinge weight below this share of the hinge's largest is a right angle's zero (a
+// triangle's right angle at an edge's end), whatever the rounding of a rotated cloth's
+// cotangents (about 1e-16 of them): set to zero so the solvers leave its blocks out.
+constexpr Scalar ZERO_HINGE_WEIGHT = 1e-12;
+// A grid's hinges on its quads' diagonals add only a twist term, which makes a grid bent at
+// 45 degrees to its axes stiffer than along them (1 + share sin^2 2 phi, phi the angle); the
+// axis edges' hinges alone bend alike in every direction but leave the checkerboard of
+// vertices up and down without any stiffness. This share of the rigidity on the diagonals'
+// hinges gives that mode stiffness at 10 % anisotropy.
+constexpr Scalar GRID_DIAGONAL_SHARE = 0.1;
+
+// The hinges of a cloth's interior edges for bending rigidity B (N m), from its rest positions
+// (Hinge): with e0 = x1 - x0, e1 = x2 - x0, e2 = x3 - x0, e3 = x2 - x1, e4 = x3 - x1 and cot(a, b)
+// the cotangent of the angle between a and b, the weights (cot(-e0, e3) + cot(-e0, e4),
+// cot(e0, e1) + cot(e0, e2), -cot(e0, e1) - cot(-e0, e3), -cot(e0, e2) - cot(-e0, e4)) (Bergou et
+// al. 2006, section 4) times sqrt(B / (A1 + A2)). The factor is this model's calibration: a grid
+// bent into a cylinder stores B c^2 / 2 a square metre away from its ends (Bending tests). On a
+// grid (grid given), the hinges of the quads' diagonals get GRID_DIAGONAL_SHARE of the rigidity.
+void add_hinges(Model& model, const TriangleMesh& mesh, int offset, Scalar rigidity, Scalar damping_time,
+                const GridMesh* grid = nullptr) {
   if (!(rigidity > 0)) return;  // a scene pays only for what it asks for
   const auto cot = [](const Vec3& a, const Vec3& b) { return a.dot(b) / a.cross(b).norm(); };
   for (const auto& corners : hinges(mesh)) {
@@ -118,7 +130,9 @@ void add_hinges(Model& model, const TriangleMesh& mesh, int offset, Scalar rigid
     const Vec3 e0 = x(1) - x(0), e1 = x(2) - x(0), e2 = x(3) - x(0), e3 = x(2) - x(1), e4 = x(3) - x(1);
     const Scalar c01 = cot(e0, e1), c02 = cot(e0, e2), c03 = cot(-e0, e3), c04 = cot(-e0, e4);
     const Scalar areas = 0.5 * (e0.cross(e1).norm() + e0.cross(e2).norm());
-    const Scalar scale = std::sqrt(rigidity / areas);
+    const int columns = grid ? grid->spec.resolution[0] + 1 : 1;
+    const bool diagonal = grid && corners[0] % columns != corners[1] % columns && corners[0] / columns != corners[1] / columns;
+    const Scalar scale = std::sqrt((diagonal ? GRID_DIAGONAL_SHARE : 1.0) * rigidity / areas);
     hinge.k = {scale * (c03 + c04), scale * (c01 + c02), -scale * (c01 + c03), -scale * (c02 + c04)};
     if (!std::all_of(hinge.k.begin(), hinge.k.end(), [](Scalar k) { return std::isfinite(k); })) continue;
     // A right angle at an edge's end gives its vertex no weight (a grid's right triangles):
@@ -240,12 +254,13 @@ Model build_model(const Scene& scene) {
     if (grid) {
       // A grid's quads bend as both of their triangulations do, at half the rigidity each:
       // one triangulation's right triangles give its hinges stencils that mix bending with
-      // twist and sample alternate rows, and a cantilever came out 22 % too soft however fine
-      // the grid (Bending tests).
+      // twist and sample alternate rows, and a cantilever came out 21 % too soft however fine
+      // the grid (docs/materials.md).
       for (const GridDiagonals diagonals : {GridDiagonals::Forward, GridDiagonals::Backward}) {
         GridSpec split = *spec.grid;
         split.diagonals = diagonals;
-        add_hinges(model, make_grid(split).mesh, offset, m.bending_rigidity / 2, m.damping);
+        const GridMesh triangulated = make_grid(split);
+        add_hinges(model, triangulated.mesh, offset, m.bending_rigidity / 2, m.damping, &triangulated);
       }
     } else {
       add_hinges(model, mesh, offset, m.bending_rigidity, m.damping);

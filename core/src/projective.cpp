@@ -57,7 +57,7 @@ ProjectiveSolver::System* ProjectiveSolver::system(Scalar h, std::string& error)
   if (auto found = systems_.find(h); found != systems_.end()) return &found->second;
   const Model& m = model_;
   std::vector<Eigen::Triplet<Scalar>> entries;
-  entries.reserve(std::size_t(free_count_) + 4 * m.springs.size());
+  entries.reserve(std::size_t(free_count_) + 4 * m.springs.size() + 16 * m.hinges.size());
   for (std::size_t v = 0; v < m.masses.size(); ++v) {
     const int a = free_index_[v];
     if (a >= 0) entries.emplace_back(a, a, m.masses[v] * (1 + h * m.air_damping[v]));

@@ -262,7 +262,7 @@ ClothSpec read_cloth(const Node& n) {
     if (m.has("stretch")) c.material.stretch = m.at("stretch").non_negative();
     if (m.has("shear")) c.material.shear = m.at("shear").non_negative();
     if (m.has("bend")) c.material.bend = m.at("bend").non_negative();
-    if (m.has("bending_rigidity")) c.material.bending_rigidity = m.at("bending_rigidity").non_negative();
+    if (m.has("bending_rigidity")) c.material.bending_rigidity = m.at("bending_rigidity").positive();  // no bending: `bend` 0
     if (m.has("damping")) c.material.damping = m.at("damping").non_negative();
     if (m.has("air_damping")) c.material.air_damping = m.at("air_damping").non_negative();
   }
