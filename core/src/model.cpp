@@ -29,16 +29,24 @@ TriangleMesh read_mesh(const Scene& scene, const std::filesystem::path& file, co
   return mesh;
 }
 
+// Each edge (local indices, offset to the cloth's first vertex) a spring of the constant its
+// rest length gives, k(rest) in N/m, damped by damping_time times k; edges of zero length none.
+template <class Constant>
+void add_edge_springs(Model& model, const std::vector<Edge>& edges, int offset, Scalar damping_time, SpringKind kind,
+                      Constant k_of) {
+  for (std::size_t e = 0; e < edges.size(); ++e) {
+    const int i = edges[e][0] + offset, j = edges[e][1] + offset;
+    const Scalar rest = (model.initial_positions[std::size_t(i)] - model.initial_positions[std::size_t(j)]).norm();
+    if (!(rest > 0)) continue;
+    const Scalar k = k_of(e, rest);
+    model.springs.push_back({i, j, rest, k, damping_time * k, kind});
+  }
+}
+
 void add_springs(Model& model, const std::vector<Edge>& edges, int offset, Scalar stiffness, Scalar damping_time,
                  SpringKind kind) {
   if (stiffness <= 0) return;  // a scene pays only for what it asks for
-  for (const Edge& e : edges) {
-    const int i = e[0] + offset, j = e[1] + offset;
-    const Scalar rest = (model.initial_positions[i] - model.initial_positions[j]).norm();
-    if (!(rest > 0)) continue;
-    const Scalar k = stiffness / rest;
-    model.springs.push_back({i, j, rest, k, damping_time * k, kind});
-  }
+  add_edge_springs(model, edges, offset, damping_time, kind, [&](std::size_t, Scalar rest) { return stiffness / rest; });
 }
 
 // The springs of a fabric's tensile stiffness T and shear stiffness G (N/m) on a grid of a x b
@@ -48,35 +56,28 @@ void add_springs(Model& model, const std::vector<Edge>& edges, int offset, Scala
 // and C11 = C22 = s with s - G^2 / s = T (a strip free to narrow stretches by T per unit width):
 // s = (T + sqrt(T^2 + 4 G^2)) / 2. An axis spring on the cloth's border serves one cell, not
 // two: half of it. Refused (with why) where the cells are too elongated for G.
-void add_fabric_grid_springs(Model& model, const GridMesh& grid, int offset, const Material& m, const Scene& scene,
-                             const std::string& path) {
-  const int nx = grid.spec.resolution[0], ny = grid.spec.resolution[1];
+void add_fabric_grid_springs(Model& model, const GridMesh& grid, const GridSprings& springs, int offset,
+                             const Material& m, const Scene& scene, const std::string& path) {
+  const int columns = grid.spec.resolution[0] + 1, ny = grid.spec.resolution[1];
   const auto at = [&](int i, int j) { return model.initial_positions[std::size_t(grid.index(i, j) + offset)]; };
   const Scalar a = (at(1, 0) - at(0, 0)).norm(), b = (at(0, 1) - at(0, 0)).norm(), d2 = a * a + b * b;
   const Scalar T = m.tensile_stiffness, G = m.shear_stiffness;
-  const Scalar s = 0.5 * (T + std::sqrt(T * T + 4 * G * G));
+  const Scalar s = 0.5 * (T + std::hypot(T, 2 * G));
   const Scalar kx = s * b / a - G * a / b, ky = s * a / b - G * b / a, kd = G * d2 / (2 * a * b);
-  if (!(kx > 0 && ky > 0)) {
+  if (!(kx > 0 && ky > 0 && kd > 0 && std::isfinite(kx) && std::isfinite(ky) && std::isfinite(kd))) {
     std::ostringstream what;
     what << "the grid's quads (" << a << " x " << b << " m) are too elongated for a shear stiffness of " << G
-         << " N/m with a tensile stiffness of " << T << " N/m (their axis springs would need a negative constant); "
-         << "expected quads closer to square or a lower shear stiffness";
+         << " N/m with a tensile stiffness of " << T << " N/m (their springs would need a negative or infinite "
+         << "constant); expected quads closer to square and stiffnesses of a fabric";
     fail(scene, path + "/material/shear_stiffness", what.str());
   }
-  const auto add = [&](int i0, int j0, int i1, int j1, Scalar k, SpringKind kind) {
-    const int u = grid.index(i0, j0) + offset, v = grid.index(i1, j1) + offset;
-    const Scalar rest = (model.initial_positions[std::size_t(u)] - model.initial_positions[std::size_t(v)]).norm();
-    model.springs.push_back({u, v, rest, k, m.damping * k, kind});
-  };
-  for (int j = 0; j <= ny; ++j)
-    for (int i = 0; i <= nx; ++i) {
-      if (i < nx) add(i, j, i + 1, j, (j == 0 || j == ny ? 0.5 : 1.0) * kx, SpringKind::Stretch);
-      if (j < ny) add(i, j, i, j + 1, (i == 0 || i == nx ? 0.5 : 1.0) * ky, SpringKind::Stretch);
-      if (i < nx && j < ny) {
-        add(i, j, i + 1, j + 1, kd, SpringKind::Shear);
-        add(i + 1, j, i, j + 1, kd, SpringKind::Shear);
-      }
-    }
+  add_edge_springs(model, springs.stretch, offset, m.damping, SpringKind::Stretch, [&](std::size_t e, Scalar) {
+    const int u = springs.stretch[e][0], v = springs.stretch[e][1];
+    const bool along_x = v - u == 1;  // else a column's edge, v - u = columns
+    const bool border = along_x ? u / columns == 0 || u / columns == ny : u % columns == 0 || u % columns == columns - 1;
+    return (border ? 0.5 : 1.0) * (along_x ? kx : ky);
+  });
+  add_edge_springs(model, springs.shear, offset, m.damping, SpringKind::Shear, [&](std::size_t, Scalar) { return kd; });
 }
 
 // The edge springs of a fabric's tensile stiffness T on a triangle mesh: each edge gets T
@@ -92,13 +93,9 @@ void add_fabric_mesh_springs(Model& model, const TriangleMesh& mesh, int offset,
                                .norm();
     for (int k = 0; k < 3; ++k) area[Edge{std::min(t[k], t[(k + 1) % 3]), std::max(t[k], t[(k + 1) % 3])}] += a;
   }
-  for (const Edge& e : mesh_edges(mesh)) {
-    const int u = e[0] + offset, v = e[1] + offset;
-    const Scalar rest = (model.initial_positions[std::size_t(u)] - model.initial_positions[std::size_t(v)]).norm();
-    if (!(rest > 0)) continue;
-    const Scalar k = m.tensile_stiffness * area[e] / (rest * rest);
-    model.springs.push_back({u, v, rest, k, m.damping * k, SpringKind::Stretch});
-  }
+  const std::vector<Edge> edges = mesh_edges(mesh);
+  add_edge_springs(model, edges, offset, m.damping, SpringKind::Stretch,
+                   [&](std::size_t e, Scalar rest) { return m.tensile_stiffness * area[edges[e]] / (rest * rest); });
 }
 
 // A hinge weight below this share of the hinge's largest is a right angle's zero (a
@@ -135,9 +132,6 @@ void add_hinges(Model& model, const TriangleMesh& mesh, int offset, Scalar rigid
     const Scalar scale = std::sqrt((diagonal ? GRID_DIAGONAL_SHARE : 1.0) * rigidity / areas);
     hinge.k = {scale * (c03 + c04), scale * (c01 + c02), -scale * (c01 + c03), -scale * (c02 + c04)};
     if (!std::all_of(hinge.k.begin(), hinge.k.end(), [](Scalar k) { return std::isfinite(k); })) continue;
-    // A right angle at an edge's end gives its vertex no weight (a grid's right triangles):
-    // exactly zero, so that the solvers leave its blocks out, whatever the rounding of a
-    // rotated grid's cotangents.
     const Scalar largest = std::max({std::abs(hinge.k[0]), std::abs(hinge.k[1]), std::abs(hinge.k[2]), std::abs(hinge.k[3])});
     for (Scalar& k : hinge.k)
       if (std::abs(k) <= ZERO_HINGE_WEIGHT * largest) k = 0;
@@ -240,7 +234,7 @@ Model build_model(const Scene& scene) {
     if (grid) {
       const GridSprings springs = grid_springs(*grid);
       if (fabric) {
-        add_fabric_grid_springs(model, *grid, offset, m, scene, path);
+        add_fabric_grid_springs(model, *grid, springs, offset, m, scene, path);
       } else {
         add_springs(model, springs.stretch, offset, m.stretch, m.damping, SpringKind::Stretch);
         add_springs(model, springs.shear, offset, m.shear, m.damping, SpringKind::Shear);

@@ -242,23 +242,29 @@ ClothSpec read_cloth(const Node& n) {
     const Node m = n.at("material");
     m.allow({"density", "mass_per_area", "stretch", "tensile_stiffness", "shear", "shear_stiffness", "bend",
              "bending_rigidity", "damping", "air_damping"});
-    // Each quantity in one form: the springs' (N, kg/m^2) or the fabric's (N/m, g/m^2).
-    for (const auto& [spring, fabric] : {std::pair{"density", "mass_per_area"}, std::pair{"stretch", "tensile_stiffness"},
-                                         std::pair{"shear", "shear_stiffness"}})
-      if (m.has(spring) && m.has(fabric))
-        m.at(fabric).fail(std::string("expected `") + spring + "` or `" + fabric + "`, not both");
+    // A material is the springs' constants or the fabric's measurements, not a mix: a spring
+    // key beside the fabric's stiffnesses would be silently ignored or (bend springs) stiffen
+    // the sheet by an amount that depends on the resolution.
+    if (m.has("density") && m.has("mass_per_area"))
+      m.at("mass_per_area").fail("expected 'density' (kg/m^2) or 'mass_per_area' (g/m^2), not both");
+    const bool fabric = m.has("tensile_stiffness") || m.has("shear_stiffness");
+    for (const char* spring : {"stretch", "shear", "bend"})
+      if (fabric && m.has(spring))
+        m.at(spring).fail(std::string("expected no '") + spring + "' beside 'tensile_stiffness' and 'shear_stiffness' "
+                          "(N/m): the fabric's keys set the springs, and its bending is 'bending_rigidity' (N m)");
     if (!c.grid && m.has("shear_stiffness"))
       m.at("shear_stiffness").fail("a mesh cloth's springs lie on its edges: its shear stiffness follows from "
-                                   "`tensile_stiffness` (3/8 of it, an isotropic sheet); expected that key alone");
-    if (c.grid && m.has("tensile_stiffness") != m.has("shear_stiffness"))
+                                   "'tensile_stiffness' (3/8 of it for equilateral triangles); expected that key alone");
+    if (c.grid && fabric && !(m.has("tensile_stiffness") && m.has("shear_stiffness")))
       m.at(m.has("tensile_stiffness") ? "tensile_stiffness" : "shear_stiffness")
-          .fail("expected `tensile_stiffness` and `shear_stiffness` together (N/m): a grid's springs need both");
+          .fail("expected 'tensile_stiffness' and 'shear_stiffness' together (N/m): a grid's springs need both");
     if (m.has("bend") && m.has("bending_rigidity"))
-      m.at("bending_rigidity").fail("expected one bending model: `bend` (springs) or `bending_rigidity` (N m, hinges), not both");
+      m.at("bending_rigidity").fail("expected one bending model: 'bend' (springs) or 'bending_rigidity' (N m, hinges), not both");
     if (m.has("density")) c.material.density = m.at("density").positive();
     if (m.has("mass_per_area")) c.material.density = m.at("mass_per_area").positive() / 1000;  // g/m^2
     if (m.has("tensile_stiffness")) c.material.tensile_stiffness = m.at("tensile_stiffness").positive();
     if (m.has("shear_stiffness")) c.material.shear_stiffness = m.at("shear_stiffness").positive();
+    if (fabric) c.material.bend = 0;  // bending, if any, from the rigidity
     if (m.has("stretch")) c.material.stretch = m.at("stretch").non_negative();
     if (m.has("shear")) c.material.shear = m.at("shear").non_negative();
     if (m.has("bend")) c.material.bend = m.at("bend").non_negative();

@@ -107,28 +107,35 @@ TEST(SpringForce, DampingJacobianMatchesFiniteDifferences) {
   }
 }
 
-TEST(ModelForces, PotentialEnergyGradientMatchesTheSprings) {
-  // A perturbed grid: the sum of spring forces must be minus the gradient of the spring energy.
-  Scene scene = parse_scene(R"({"cloths": [{"grid": {"size": [1, 1], "resolution": [4, 3]}}], "gravity": [0, 0, 0]})",
-                            "inline.json");
-  const Model model = build_model(scene);
-  State state = initial_state(model);
-  std::mt19937_64 rng(5);
-  for (Vec3& x : state.positions) x += random_vec(rng, 0.05);
-  std::vector<Vec3> force(model.vertex_count(), Vec3::Zero());
-  for (const Spring& s : model.springs) {
-    const auto e = evaluate_spring(state.positions[s.i], state.positions[s.j], Vec3::Zero(), Vec3::Zero(),
-                                   s.rest_length, s.stiffness, 0);
-    force[s.i] += e.force;
-    force[s.j] -= e.force;
-  }
-  for (std::size_t v = 0; v < model.vertex_count(); ++v) {
-    for (int c = 0; c < 3; ++c) {
-      State plus = state, minus = state;
-      plus.positions[v][c] += STEP;
-      minus.positions[v][c] -= STEP;
-      const Scalar dE = (potential_energy(model, plus) - potential_energy(model, minus)) / (2 * STEP);
-      EXPECT_NEAR(force[v][c], -dE, 1e-5 * (1 + std::abs(dE)));
+TEST(ModelForces, PotentialEnergyGradientMatchesTheSpringsAndHinges) {
+  // Perturbed grids, with bend springs and with bending hinges: the sum of the springs' and
+  // hinges' forces must be minus the gradient of potential_energy.
+  for (const char* material : {"{}", R"({"bending_rigidity": 0.01})"}) {
+    Scene scene = parse_scene(R"({"cloths": [{"grid": {"size": [1, 1], "resolution": [4, 3]}, "material": )" +
+                                  std::string(material) + R"(}], "gravity": [0, 0, 0]})",
+                              "inline.json");
+    const Model model = build_model(scene);
+    State state = initial_state(model);
+    std::mt19937_64 rng(5);
+    for (Vec3& x : state.positions) x += random_vec(rng, 0.05);
+    std::vector<Vec3> force(model.vertex_count(), Vec3::Zero());
+    for (const Spring& s : model.springs) {
+      const auto e = evaluate_spring(state.positions[s.i], state.positions[s.j], Vec3::Zero(), Vec3::Zero(),
+                                     s.rest_length, s.stiffness, 0);
+      force[s.i] += e.force;
+      force[s.j] -= e.force;
+    }
+    const std::vector<Vec3> still(model.vertex_count(), Vec3::Zero());
+    for (const Hinge& hinge : model.hinges)
+      for (std::size_t i = 0; i < 4; ++i) force[std::size_t(hinge.v[i])] += hinge_force(hinge, i, state.positions, still);
+    for (std::size_t v = 0; v < model.vertex_count(); ++v) {
+      for (int c = 0; c < 3; ++c) {
+        State plus = state, minus = state;
+        plus.positions[v][c] += STEP;
+        minus.positions[v][c] -= STEP;
+        const Scalar dE = (potential_energy(model, plus) - potential_energy(model, minus)) / (2 * STEP);
+        EXPECT_NEAR(force[v][c], -dE, 1e-5 * (1 + std::abs(dE))) << material;
+      }
     }
   }
 }

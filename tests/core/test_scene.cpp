@@ -81,6 +81,21 @@ TEST(Scene, BadInputNamesTheFileThePathAndWhatWasExpected) {
       {R"({"cloths": [{"grid": {}}], "frames": "ten"})", "/frames: expected an integer, found \"ten\""},
       {R"({"cloths": [{"grid": {}}], "frames": 0})", "/frames: expected an integer from 1"},
       {R"({"cloths": [{"grid": {}, "material": {"density": -1}}]})", "/cloths/0/material/density: expected a number > 0"},
+      {R"({"cloths": [{"grid": {}, "material": {"density": 0.2, "mass_per_area": 200}}]})",
+       "/cloths/0/material/mass_per_area: expected 'density' (kg/m^2) or 'mass_per_area' (g/m^2), not both"},
+      {R"({"cloths": [{"grid": {}, "material": {"stretch": 9, "tensile_stiffness": 9, "shear_stiffness": 1}}]})",
+       "/cloths/0/material/stretch: expected no 'stretch' beside 'tensile_stiffness' and 'shear_stiffness'"},
+      {R"({"cloths": [{"grid": {}, "material": {"bend": 1, "tensile_stiffness": 9, "shear_stiffness": 1}}]})",
+       "/cloths/0/material/bend: expected no 'bend' beside"},
+      {R"({"cloths": [{"grid": {}, "material": {"tensile_stiffness": 9}}]})",
+       "/cloths/0/material/tensile_stiffness: expected 'tensile_stiffness' and 'shear_stiffness' together"},
+      {R"({"cloths": [{"grid": {}, "material": {"shear_stiffness": 9}}]})",
+       "/cloths/0/material/shear_stiffness: expected 'tensile_stiffness' and 'shear_stiffness' together"},
+      {R"({"cloths": [{"grid": {"size": [1, 1], "resolution": [2, 20]}, "material": {"tensile_stiffness": 100, "shear_stiffness": 90}}]})",
+       "/cloths/0/material/shear_stiffness: the grid's quads (0.5 x 0.05 m) are too elongated"},
+      {R"({"cloths": [{"grid": {}, "material": {"bend": 1, "bending_rigidity": 1e-5}}]})",
+       "/cloths/0/material/bending_rigidity: expected one bending model"},
+      {R"({"cloths": [{"grid": {}, "material": {"bending_rigidity": 0}}]})", "/cloths/0/material/bending_rigidity: expected a number > 0"},
       {R"({"cloths": [{"grid": {"resolution": [0, 4]}}]})", "/cloths/0/grid/resolution/0: expected an integer from 1"},
       {R"({"cloths": [{"grid": {"size": [1, -2]}}]})", "/cloths/0/grid/size: expected two sizes > 0"},
       {R"({"cloths": []})", "/cloths: expected at least 1 entries"},
@@ -196,6 +211,12 @@ TEST(Scene, BadMeshesAreRejectedWithTheirProblem) {
       << error_of(scene_with("nonmanifold.obj"));
   EXPECT_NE(error_of(scene_with("degenerate.obj")).find("zero area"), std::string::npos) << error_of(scene_with("degenerate.obj"));
   EXPECT_NE(error_of(scene_with("garbage.obj")).find("/cloths/0/mesh:"), std::string::npos) << error_of(scene_with("garbage.obj"));
+  // A mesh's springs lie on its edges: the fabric's shear stiffness is not the scene's to give.
+  const std::string shear = R"({"cloths": [{"mesh": ")" + (dir / "good.obj").string() +
+                            R"(", "material": {"tensile_stiffness": 300, "shear_stiffness": 30}}]})";
+  EXPECT_NE(error_of(shear).find("/cloths/0/material/shear_stiffness: a mesh cloth's springs lie on its edges"),
+            std::string::npos)
+      << error_of(shear);
   EXPECT_EQ(error_of(scene_with("good.obj")), "");
   // A NaN is never welded into a finite vertex: the mesh check sees it.
   std::ofstream(dir / "nan.obj") << "v nan 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nf 1 2 3\nf 1 3 4\n";

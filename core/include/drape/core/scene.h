@@ -91,7 +91,8 @@ struct Material {
   /// N/m: the fabric's tensile stiffness (force per unit width over strain in a strip test,
   /// free to narrow) and shear stiffness (force per unit width over shear angle); above zero
   /// they give the springs' constants from the cloth's geometry in place of `stretch` and
-  /// `shear` (fabric_springs in model.cpp), the same sheet at any resolution.
+  /// `shear` (add_fabric_grid_springs and add_fabric_mesh_springs in model.cpp), the same
+  /// sheet at any resolution.
   Scalar tensile_stiffness = 0;
   Scalar shear_stiffness = 0;
 };
