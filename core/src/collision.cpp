@@ -10,12 +10,14 @@
 
 #include "drape/ccd/broad_phase.h"
 #include "drape/ccd/distance.h"
+#include "drape/ccd/patch_tree.h"
 #include "drape/core/obstacle.h"
 
 namespace drape {
 
 void CollisionCounters::add(const CollisionCounters& o) {
   bvh_pairs += o.bvh_pairs;
+  culled_triangles += o.culled_triangles;
   tests += o.tests;
   vf_tests += o.vf_tests;
   ee_tests += o.ee_tests;
@@ -104,7 +106,8 @@ struct CollisionPipeline::Impl {
     ccd::BoxTree tree;
   };
   std::vector<MeshObstacle> obstacles;
-  ccd::BoxTree cloth_tree;
+  ccd::BoxTree cloth_tree;     // the cloth's triangles, against the mesh obstacles (and itself without self_culling)
+  ccd::PatchTree patch_tree;   // self-collision with self_culling
   std::vector<Scalar> inverse_mass;  // combined array; 0 for kinematic vertices
   std::vector<int> cloth_of_vertex;  // cloth vertices only: the index of their cloth
   std::vector<Vec3> start, end;      // combined positions at t and t + h
@@ -134,6 +137,7 @@ struct CollisionPipeline::Impl {
       if (m.pin_of_vertex[v] < 0) inverse_mass[v] = 1.0 / m.masses[v];
     start.resize(offset);
     end.resize(offset);
+    if (m.scene.collisions.self && m.scene.collisions.self_culling) patch_tree = ccd::PatchTree(cloth_triangles, m.initial_positions);
     options.method = m.scene.collisions.method;
     options.thickness = 0;  // exact contact; the thickness is kept by proximity repulsion
   }
@@ -143,27 +147,39 @@ struct CollisionPipeline::Impl {
   ccd::Candidates candidates(Scalar margin, CollisionCounters& counters, bool self = true) {
     const auto begin = Clock::now();
     ccd::Candidates all;
-    boxes.resize(cloth_triangles.size());
-    for (std::size_t i = 0; i < cloth_triangles.size(); ++i) boxes[i] = ccd::swept_box(cloth_triangles[i], start, end, margin);
-    cloth_tree.update(boxes);
-    if (model.scene.collisions.feature_boxes) features = ccd::vertex_volumes(start, end, margin);
-    else features.clear();
-    const auto append = [&](ccd::Candidates&& c) {
+    const bool self_pairs = self && model.scene.collisions.self;
+    const bool culling = self_pairs && model.scene.collisions.self_culling;
+    // The cloth's btDbvt serves the mesh obstacles, and self-collision without culling.
+    if (!obstacles.empty() || (self_pairs && !culling)) {
+      boxes.resize(cloth_triangles.size());
+      for (std::size_t i = 0; i < cloth_triangles.size(); ++i) boxes[i] = ccd::swept_box(cloth_triangles[i], start, end, margin);
+      cloth_tree.update(boxes);
+    }
+    bool features_ready = false;
+    const auto append = [&](std::span<const ccd::TriangleIndices> other, const std::vector<std::pair<std::int32_t, std::int32_t>>& pairs) {
+      counters.bvh_pairs += long(pairs.size());
+      if (pairs.empty()) return;
+      if (!features_ready) {
+        if (model.scene.collisions.feature_boxes) features = ccd::vertex_volumes(start, end, margin);
+        else features.clear();
+        features_ready = true;
+      }
+      ccd::Candidates c = ccd::feature_pairs(cloth_triangles, other, pairs, features, settings.threads);
       all.vertex_face.insert(all.vertex_face.end(), c.vertex_face.begin(), c.vertex_face.end());
       all.edge_edge.insert(all.edge_edge.end(), c.edge_edge.begin(), c.edge_edge.end());
     };
-    if (self && model.scene.collisions.self) {
-      const auto pairs = cloth_tree.self_pairs();
-      counters.bvh_pairs += long(pairs.size());
-      append(ccd::feature_pairs(cloth_triangles, cloth_triangles, pairs, features, settings.threads));
+    if (culling) {
+      ccd::SelfCullCounters culled;
+      append(cloth_triangles, patch_tree.self_pairs(start, end, margin, settings.threads, &culled));
+      counters.culled_triangles += culled.triangles_culled;
+    } else if (self_pairs) {
+      append(cloth_triangles, cloth_tree.self_pairs());
     }
     for (MeshObstacle& mo : obstacles) {
       std::vector<ccd::Aabb> obstacle_boxes(mo.triangles.size());
       for (std::size_t i = 0; i < mo.triangles.size(); ++i) obstacle_boxes[i] = ccd::swept_box(mo.triangles[i], start, end, margin);
       mo.tree.update(obstacle_boxes);
-      const auto pairs = cloth_tree.pairs_with(mo.tree);
-      counters.bvh_pairs += long(pairs.size());
-      append(ccd::feature_pairs(cloth_triangles, mo.triangles, pairs, features, settings.threads));
+      append(mo.triangles, cloth_tree.pairs_with(mo.tree));
     }
     counters.broad_ms += ms_since(begin);
     return all;
@@ -552,9 +568,11 @@ CollisionCounters CollisionPipeline::resolve(const std::vector<Vec3>& start, Sca
   ccd::Candidates first;
   auto hits = m.detect(h, motion, counters, &first);
   Impl::ContactSet contacts;
+  const std::vector<Vec3> detected = motion;
   m.repel(first, h, motion, contacts, counters);
   m.keep_out_of_analytic_obstacles(t + h, h, motion);
-  hits = m.detect(h, motion, counters);
+  // Detection is a function of the motion: when neither changed it, its hits stand.
+  if (motion != detected) hits = m.detect(h, motion, counters);
   for (int round = 0; !hits.empty() && round < m.model.scene.collisions.max_impulse_iterations; ++round) {
     ++counters.impulse_iterations;
     for (const auto& [contact, toc] : hits) contacts.add(contact, separation, m.inverse_mass);

@@ -56,6 +56,7 @@ const std::vector<StatsColumn>& stats_columns() {
       {"obstacle_contacts", [](S s) { return integer(s.obstacle_contacts); }, COUNT},
       {"solver_warnings", [](S s) { return integer(s.solver_warnings); }, EXACT},
       {"bvh_pairs", [](S s) { return integer(s.collisions.bvh_pairs); }},
+      {"culled_triangles", [](S s) { return integer(s.collisions.culled_triangles); }},
       {"vf_tests", [](S s) { return integer(s.collisions.vf_tests); }},
       {"ee_tests", [](S s) { return integer(s.collisions.ee_tests); }},
       {"culled", [](S s) { return integer((long long)s.collisions.tests.culled); }},

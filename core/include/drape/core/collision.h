@@ -37,6 +37,7 @@ struct CollisionSettings {
 /// What the pipeline did in one step; summed into the frame statistics.
 struct CollisionCounters {
   long bvh_pairs = 0;           ///< overlapping triangle pairs, summed over detection rounds
+  long culled_triangles = 0;    ///< triangles in patches proven free of self-contact (their pairs never enumerated), summed over rounds
   ccd::BatchCounters tests;     ///< elementary tests (vertex-face + edge-edge), culled, ...
   long vf_tests = 0, ee_tests = 0;
   long ccd_hits = 0;            ///< collisions found, summed over rounds

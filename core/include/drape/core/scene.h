@@ -196,6 +196,10 @@ struct CollisionSpec {
   /// the narrow phase (ccd::vertex_volumes, ccd::feature_pairs). Changes the cost, never the
   /// contacts found.
   bool feature_boxes = true;
+  /// Self-collision: leave out the pairs inside patches of cloth proven free of self-contact
+  /// over the step by a continuous normal cone and a contour test (ccd::PatchTree). Changes the
+  /// cost and the proximity pairs inside such patches, never whether a collision is found.
+  bool self_culling = true;
 };
 
 struct OutputSpec {

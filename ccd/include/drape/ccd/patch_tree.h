@@ -1,0 +1,81 @@
+#pragma once
+/// \file
+/// Self-collision culling: a hierarchy of connected patches of one triangle mesh, each patch
+/// proven free of self-contact over a step by a continuous normal cone and a contour test, so
+/// that a flat or gently curved, untwisted region of cloth gives no candidate pairs.
+///
+/// The test is Volino and Magnenat-Thalmann's (1994): a connected surface whose normals all
+/// lie within 90 degrees of one direction d, and whose boundary contour projected along d has
+/// no self-intersection, does not intersect itself. Over a step every corner moves linearly,
+/// so a triangle's normal is a quadratic in t whose three Bernstein coefficients bound it
+/// (Tang, Curtis, Yoon and Manocha 2009, continuous normal cones); the contour is tested as a
+/// star around the mean of its corners, each contour edge's signed area around it a quadratic
+/// whose Bernstein coefficients must all be positive, and it must wind around that point once
+/// (the unprojected star test of Wang, Liu, Tang, Tong and Manocha 2017). A patch that passes
+/// stays embedded during the whole step, so no two of its features can touch.
+
+#include <array>
+#include <cstdint>
+#include <span>
+#include <utility>
+#include <vector>
+
+#include "drape/ccd/broad_phase.h"
+
+namespace drape::ccd {
+
+/// What one self_pairs call did, for the statistics.
+struct SelfCullCounters {
+  long patches_tested = 0;  ///< patches whose cone and contour were tested
+  long patches_culled = 0;  ///< of those, proven free of self-contact (their pairs never enumerated)
+  long triangles_culled = 0;  ///< triangles inside the culled patches
+};
+
+class PatchTree {
+ public:
+  PatchTree() = default;
+  /// Builds the hierarchy once from the mesh's connectivity; reference (a shape of the mesh,
+  /// the rest shape) only guides where patches are split. Triangles are joined across an edge
+  /// only when exactly two of them share it with opposite windings (a consistently oriented,
+  /// manifold edge); a patch is tested only when it is a topological disk.
+  PatchTree(std::span<const TriangleIndices> triangles, std::span<const Vec3> reference);
+
+  /// The triangle pairs (i < j) whose swept boxes (corners at start and at end, grown by
+  /// margin) overlap, leaving out every pair inside a patch proven free of self-contact for the
+  /// whole step. Pairs of triangles sharing a vertex are kept (their other features can still
+  /// meet). Sorted; the same for any thread count.
+  std::vector<std::pair<std::int32_t, std::int32_t>> self_pairs(std::span<const Vec3> start, std::span<const Vec3> end,
+                                                                Scalar margin, int threads = 1,
+                                                                SelfCullCounters* counters = nullptr);
+
+  std::size_t node_count() const { return nodes_.size(); }
+
+ private:
+  struct Node {
+    std::int32_t right = -1;           // the right child's index (the left is the next node); -1 for a leaf
+    std::int32_t first = 0, count = 0;  // the node's triangles: order_[first, first + count)
+    std::int32_t contour_first = 0, contour_count = 0;  // the disk's boundary: contours_[...]; 0 when not a disk
+  };
+  struct Motion;  // per-call state: triangle boxes, node boxes and cones
+  struct BuildScratch {
+    std::vector<std::array<std::int32_t, 3>> neighbours;  // across each triangle's edges; -1: none
+    std::vector<std::int32_t> stamp, position;          // the node a triangle was last in, and where
+  };
+
+  std::int32_t build(std::vector<std::int32_t>& set, BuildScratch& scratch, std::span<const Vec3> reference);
+  bool culled(const Motion& motion, std::int32_t node, SelfCullCounters& counters) const;
+  void self(const Motion& motion, std::int32_t node, std::vector<std::pair<std::int32_t, std::int32_t>>& out,
+            SelfCullCounters& counters) const;
+  // A node's pairs once it is known not to be culled.
+  void own(const Motion& motion, std::int32_t node, std::vector<std::pair<std::int32_t, std::int32_t>>& out,
+           SelfCullCounters& counters) const;
+  void across(const Motion& motion, std::int32_t a, std::int32_t b,
+              std::vector<std::pair<std::int32_t, std::int32_t>>& out) const;
+
+  std::vector<TriangleIndices> triangles_;
+  std::vector<std::int32_t> order_;     // triangle indices, each leaf's contiguous
+  std::vector<std::int32_t> contours_;  // the disks' boundary vertices, counter-clockwise about their normals
+  std::vector<Node> nodes_;             // depth first: a node's left child follows it
+};
+
+}  // namespace drape::ccd

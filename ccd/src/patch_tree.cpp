@@ -1,0 +1,433 @@
+#include "drape/ccd/patch_tree.h"
+
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+#include <tbb/task_arena.h>
+#include <tbb/task_group.h>
+
+#include <algorithm>
+#include <cmath>
+#include <numeric>
+#include <tuple>
+#include <unordered_map>
+
+namespace drape::ccd {
+
+namespace {
+
+// Triangles a leaf holds at most: its self pairs are tested box against box.
+constexpr std::int32_t LEAF_TRIANGLES = 8;
+// The least cosine, between a cone's axis and any normal coefficient, of a cone that counts as
+// within 90 degrees (89.99994 degrees): far above the error of the computed directions, which
+// DEGENERATE bounds.
+constexpr Scalar CONE_MARGIN = 1e-6;
+// A normal coefficient shorter than this times the product of its edges' lengths is a
+// degenerate triangle whose computed direction means nothing: its patches are never culled.
+constexpr Scalar DEGENERATE = 1e-8;
+// A contour edge's signed area around the star's centre must exceed this times the product of
+// the two corners' distances from it (far above the rounding error of the determinant).
+constexpr Scalar STAR_MARGIN = 1e-9;
+// Nodes at least this large are traversed as parallel tasks.
+constexpr std::int32_t TASK_TRIANGLES = 2048;
+
+using Pairs = std::vector<std::pair<std::int32_t, std::int32_t>>;
+
+Aabb merged(const Aabb& a, const Aabb& b) { return {a.min.cwiseMin(b.min), a.max.cwiseMax(b.max)}; }
+
+}  // namespace
+
+// Per-call state: the triangles' boxes (in order_'s order) and each node's box and normal
+// cone (axis, cosine and sine of the half-angle; cone_ok false when it is not within 90
+// degrees or holds a degenerate triangle).
+struct PatchTree::Motion {
+  std::span<const Vec3> start, end;
+  std::vector<Aabb> triangle_box;
+  std::vector<Aabb> box;
+  std::vector<Vec3> sum;  // area-weighted normal coefficients, summed: the cone's axis
+  std::vector<Vec3> axis;
+  std::vector<Scalar> cos, sin;
+  std::vector<char> cone_ok;
+};
+
+PatchTree::PatchTree(std::span<const TriangleIndices> triangles, std::span<const Vec3> reference)
+    : triangles_(triangles.begin(), triangles.end()) {
+  const auto n = std::int32_t(triangles_.size());
+  if (n == 0) return;
+  // Neighbours across consistently oriented manifold edges: edge i runs from corner i to i + 1.
+  struct HalfEdge {
+    std::int32_t low, high, triangle, corner;
+    bool forward;  // runs low -> high
+  };
+  std::vector<HalfEdge> half;
+  half.reserve(std::size_t(n) * 3);
+  for (std::int32_t t = 0; t < n; ++t)
+    for (std::int32_t i = 0; i < 3; ++i) {
+      const std::int32_t a = triangles_[t][i], b = triangles_[t][(i + 1) % 3];
+      half.push_back({std::min(a, b), std::max(a, b), t, i, a < b});
+    }
+  std::sort(half.begin(), half.end(), [](const HalfEdge& x, const HalfEdge& y) {
+    return std::tie(x.low, x.high, x.triangle, x.corner) < std::tie(y.low, y.high, y.triangle, y.corner);
+  });
+  BuildScratch scratch;
+  scratch.neighbours.assign(std::size_t(n), {-1, -1, -1});
+  scratch.stamp.assign(std::size_t(n), -1);
+  scratch.position.assign(std::size_t(n), 0);
+  auto& neighbours = scratch.neighbours;
+  for (std::size_t i = 0; i < half.size();) {
+    std::size_t j = i;
+    while (j < half.size() && half[j].low == half[i].low && half[j].high == half[i].high) ++j;
+    const HalfEdge &x = half[i], &y = half[j - 1];
+    if (j - i == 2 && x.low != x.high && x.forward != y.forward && x.triangle != y.triangle) {
+      neighbours[x.triangle][x.corner] = y.triangle;
+      neighbours[y.triangle][y.corner] = x.triangle;
+    }
+    i = j;
+  }
+  std::vector<std::int32_t> all(static_cast<std::size_t>(n));
+  std::iota(all.begin(), all.end(), 0);
+  order_.reserve(std::size_t(n));
+  build(all, scratch, reference);
+}
+
+std::int32_t PatchTree::build(std::vector<std::int32_t>& set, BuildScratch& scratch, std::span<const Vec3> reference) {
+  const auto& neighbours = scratch.neighbours;
+  const auto index = std::int32_t(nodes_.size());
+  nodes_.push_back({-1, std::int32_t(order_.size()), std::int32_t(set.size()), 0, 0});
+  // Membership of the set, for its connectivity and boundary (the parent's is no longer needed).
+  for (std::size_t k = 0; k < set.size(); ++k) scratch.stamp[std::size_t(set[k])] = index, scratch.position[std::size_t(set[k])] = std::int32_t(k);
+  const auto in_set = [&](std::int32_t t) { return t >= 0 && scratch.stamp[std::size_t(t)] == index; };
+  // Connected components through the neighbour links inside the set.
+  std::vector<std::int32_t> component(set.size(), -1);
+  std::int32_t components = 0;
+  for (std::size_t k = 0; k < set.size(); ++k) {
+    if (component[k] >= 0) continue;
+    std::vector<std::int32_t> stack{std::int32_t(k)};
+    component[k] = components;
+    while (!stack.empty()) {
+      const std::int32_t at = stack.back();
+      stack.pop_back();
+      for (std::int32_t nb : neighbours[set[std::size_t(at)]])
+        if (in_set(nb)) {
+          const std::int32_t p = scratch.position[std::size_t(nb)];
+          if (component[std::size_t(p)] < 0) component[std::size_t(p)] = components, stack.push_back(p);
+        }
+    }
+    ++components;
+  }
+  // A disk: connected, its boundary half-edges one cycle through distinct vertices, and Euler
+  // characteristic V - E + F = 1 (with one boundary cycle, only a disk has it).
+  if (components == 1) {
+    std::unordered_map<std::int32_t, std::int32_t> next;  // boundary vertex -> the next one
+    bool simple = true;
+    std::size_t boundary = 0;
+    std::vector<std::int32_t> vertices;
+    for (std::int32_t t : set) {
+      const TriangleIndices& tri = triangles_[std::size_t(t)];
+      for (int i = 0; i < 3; ++i) {
+        vertices.push_back(tri[i]);
+        if (in_set(neighbours[std::size_t(t)][i])) continue;
+        ++boundary;
+        simple &= next.emplace(tri[i], tri[(i + 1) % 3]).second;
+      }
+    }
+    std::sort(vertices.begin(), vertices.end());
+    const auto v = std::int64_t(std::unique(vertices.begin(), vertices.end()) - vertices.begin());
+    const auto f = std::int64_t(set.size());
+    const std::int64_t e = (3 * f + std::int64_t(boundary)) / 2;
+    if (simple && boundary >= 3 && v - e + f == 1) {
+      std::vector<std::int32_t> cycle{next.begin()->first};
+      for (auto at = next.find(cycle.back()); at != next.end() && at->second != cycle.front() && cycle.size() <= boundary;
+           at = next.find(cycle.back()))
+        cycle.push_back(at->second);
+      if (cycle.size() == boundary && next.at(cycle.back()) == cycle.front()) {
+        nodes_[std::size_t(index)].contour_first = std::int32_t(contours_.size());
+        nodes_[std::size_t(index)].contour_count = std::int32_t(cycle.size());
+        contours_.insert(contours_.end(), cycle.begin(), cycle.end());
+      }
+    }
+  }
+  if (std::int32_t(set.size()) <= LEAF_TRIANGLES) {
+    order_.insert(order_.end(), set.begin(), set.end());
+    return index;
+  }
+  // Split: whole components apart when there are several, else at the median of the
+  // triangles' centres along the longest side of their box (in the reference shape).
+  const auto centre = [&](std::int32_t t) {
+    const TriangleIndices& tri = triangles_[std::size_t(t)];
+    return Vec3((reference[tri[0]] + reference[tri[1]] + reference[tri[2]]) / 3);
+  };
+  Vec3 low = centre(set[0]), high = low;
+  for (std::int32_t t : set) low = low.cwiseMin(centre(t)), high = high.cwiseMax(centre(t));
+  int axis = 0;
+  (high - low).maxCoeff(&axis);
+  std::vector<std::int32_t> left, right;
+  if (components > 1) {
+    std::vector<Scalar> position(std::size_t(components), 0);
+    std::vector<std::int32_t> size(std::size_t(components), 0);
+    for (std::size_t k = 0; k < set.size(); ++k) {
+      position[std::size_t(component[k])] += centre(set[k])[axis];
+      ++size[std::size_t(component[k])];
+    }
+    std::vector<std::int32_t> ranked(static_cast<std::size_t>(components));
+    std::iota(ranked.begin(), ranked.end(), 0);
+    std::sort(ranked.begin(), ranked.end(), [&](std::int32_t a, std::int32_t b) {
+      const Scalar pa = position[std::size_t(a)] / size[std::size_t(a)], pb = position[std::size_t(b)] / size[std::size_t(b)];
+      return pa != pb ? pa < pb : a < b;
+    });
+    std::vector<char> to_left(std::size_t(components), 0);
+    std::size_t taken = 0;
+    for (std::size_t r = 0; r + 1 < ranked.size() && taken < set.size() / 2; ++r) {
+      to_left[std::size_t(ranked[r])] = 1;
+      taken += std::size_t(size[std::size_t(ranked[r])]);
+    }
+    for (std::size_t k = 0; k < set.size(); ++k) (to_left[std::size_t(component[k])] ? left : right).push_back(set[k]);
+  } else {
+    std::vector<std::int32_t> sorted = set;
+    const auto middle = sorted.begin() + std::ptrdiff_t(sorted.size() / 2);
+    std::nth_element(sorted.begin(), middle, sorted.end(), [&](std::int32_t a, std::int32_t b) {
+      const Scalar ca = centre(a)[axis], cb = centre(b)[axis];
+      return ca != cb ? ca < cb : a < b;
+    });
+    left.assign(sorted.begin(), middle);
+    right.assign(middle, sorted.end());
+  }
+  set.clear();
+  set.shrink_to_fit();
+  build(left, scratch, reference);
+  const std::int32_t r = build(right, scratch, reference);
+  nodes_[std::size_t(index)].right = r;
+  return index;
+}
+
+bool PatchTree::culled(const Motion& m, std::int32_t index, SelfCullCounters& counters) const {
+  const Node& node = nodes_[std::size_t(index)];
+  if (node.count < 2) return true;
+  if (node.contour_count == 0 || !m.cone_ok[std::size_t(index)]) return false;
+  ++counters.patches_tested;
+  const std::span<const std::int32_t> contour(contours_.data() + node.contour_first, std::size_t(node.contour_count));
+  Vec3 centre0 = Vec3::Zero(), centre1 = Vec3::Zero();
+  for (std::int32_t v : contour) centre0 += m.start[v], centre1 += m.end[v];
+  centre0 /= Scalar(contour.size());
+  centre1 /= Scalar(contour.size());
+  const Vec3& d = m.axis[std::size_t(index)];
+  // u and w span the plane across d; the contour winds once when one edge crosses the ray
+  // along u (every edge turning counter-clockwise by less than half a turn).
+  const Vec3 u = d.cross(std::abs(d.x()) < 0.9 ? Vec3::UnitX() : Vec3::UnitY()).normalized();
+  const Vec3 w = d.cross(u);
+  int crossings = 0;
+  for (std::size_t k = 0; k < contour.size(); ++k) {
+    const std::int32_t a = contour[k], b = contour[(k + 1) % contour.size()];
+    const Vec3 a0 = m.start[a] - centre0, a1 = m.end[a] - centre1;
+    const Vec3 b0 = m.start[b] - centre0, b1 = m.end[b] - centre1;
+    // The signed area (a(t) - c(t)) x (b(t) - c(t)) . d in Bernstein form of degree 2.
+    const Scalar k0 = a0.cross(b0).dot(d), k2 = a1.cross(b1).dot(d);
+    const Scalar k1 = 0.5 * (a0.cross(b1) + a1.cross(b0)).dot(d);
+    const Scalar floor = STAR_MARGIN * (a0.norm() + a1.norm()) * (b0.norm() + b1.norm());
+    if (!(k0 > floor && k1 > floor && k2 > floor)) return false;
+    if (a0.dot(w) < 0 && b0.dot(w) >= 0) ++crossings;
+  }
+  if (crossings != 1) return false;
+  ++counters.patches_culled;
+  counters.triangles_culled += node.count;
+  return true;
+}
+
+void PatchTree::self(const Motion& m, std::int32_t index, Pairs& out, SelfCullCounters& counters) const {
+  if (!culled(m, index, counters)) own(m, index, out, counters);
+}
+
+void PatchTree::own(const Motion& m, std::int32_t index, Pairs& out, SelfCullCounters& counters) const {
+  const Node& node = nodes_[std::size_t(index)];
+  if (node.right < 0) {
+    for (std::int32_t i = node.first; i < node.first + node.count; ++i)
+      for (std::int32_t j = i + 1; j < node.first + node.count; ++j)
+        if (overlap(m.triangle_box[std::size_t(i)], m.triangle_box[std::size_t(j)]))
+          out.emplace_back(std::minmax(order_[std::size_t(i)], order_[std::size_t(j)]));
+    return;
+  }
+  self(m, index + 1, out, counters);
+  self(m, node.right, out, counters);
+  across(m, index + 1, node.right, out);
+}
+
+void PatchTree::across(const Motion& m, std::int32_t a, std::int32_t b, Pairs& out) const {
+  if (!overlap(m.box[std::size_t(a)], m.box[std::size_t(b)])) return;
+  const Node &na = nodes_[std::size_t(a)], &nb = nodes_[std::size_t(b)];
+  if (na.right < 0 && nb.right < 0) {
+    for (std::int32_t i = na.first; i < na.first + na.count; ++i)
+      for (std::int32_t j = nb.first; j < nb.first + nb.count; ++j)
+        if (overlap(m.triangle_box[std::size_t(i)], m.triangle_box[std::size_t(j)]))
+          out.emplace_back(std::minmax(order_[std::size_t(i)], order_[std::size_t(j)]));
+    return;
+  }
+  if (na.right < 0 || (nb.right >= 0 && nb.count > na.count)) {
+    across(m, a, b + 1, out);
+    across(m, a, nb.right, out);
+  } else {
+    across(m, a + 1, b, out);
+    across(m, na.right, b, out);
+  }
+}
+
+std::vector<std::pair<std::int32_t, std::int32_t>> PatchTree::self_pairs(std::span<const Vec3> start,
+                                                                         std::span<const Vec3> end, Scalar margin,
+                                                                         int threads, SelfCullCounters* counters) {
+  Pairs out;
+  if (nodes_.empty()) return out;
+  Motion m;
+  m.start = start;
+  m.end = end;
+  const std::size_t nodes = nodes_.size();
+  m.triangle_box.resize(order_.size());
+  m.box.resize(nodes);
+  m.sum.resize(nodes);
+  m.axis.resize(nodes);
+  m.cos.resize(nodes);
+  m.sin.resize(nodes);
+  m.cone_ok.resize(nodes);
+  // The leaves: their triangles' boxes and normal cones.
+  std::vector<std::int32_t> leaves;
+  for (std::size_t i = 0; i < nodes; ++i)
+    if (nodes_[i].right < 0) leaves.push_back(std::int32_t(i));
+  const auto leaf = [&](std::int32_t index) {
+    const Node& node = nodes_[std::size_t(index)];
+    std::array<Vec3, 3 * LEAF_TRIANGLES> coefficient;
+    std::array<Scalar, 3 * LEAF_TRIANGLES> scale_squared;
+    Vec3 sum = Vec3::Zero();
+    for (std::int32_t k = 0; k < node.count; ++k) {
+      const TriangleIndices& tri = triangles_[std::size_t(order_[std::size_t(node.first + k)])];
+      // The normal (x1 - x0) x (x2 - x0) over the step, in Bernstein form of degree 2.
+      const Vec3 e0 = start[tri[1]] - start[tri[0]], f0 = start[tri[2]] - start[tri[0]];
+      const Vec3 e1 = end[tri[1]] - end[tri[0]], f1 = end[tri[2]] - end[tri[0]];
+      coefficient[3 * k] = e0.cross(f0);
+      coefficient[3 * k + 1] = 0.5 * (e0.cross(f1) + e1.cross(f0));
+      coefficient[3 * k + 2] = e1.cross(f1);
+      const Scalar se0 = e0.squaredNorm(), sf0 = f0.squaredNorm(), se1 = e1.squaredNorm(), sf1 = f1.squaredNorm();
+      scale_squared[3 * k] = se0 * sf0;
+      scale_squared[3 * k + 1] = 0.5 * (se0 * sf1 + se1 * sf0);
+      scale_squared[3 * k + 2] = se1 * sf1;
+      sum += coefficient[3 * k] + coefficient[3 * k + 1] + coefficient[3 * k + 2];
+    }
+    m.sum[std::size_t(index)] = sum;
+    const Scalar length = sum.norm();
+    bool ok = length > 0;
+    const Vec3 axis = ok ? Vec3(sum / length) : Vec3::UnitZ();
+    // The least cosine to the axis, squared (all coefficients on the axis' side).
+    Scalar least_squared = 1;
+    for (std::int32_t c = 0; c < 3 * node.count && ok; ++c) {
+      const Scalar along = coefficient[std::size_t(c)].dot(axis), norm_squared = coefficient[std::size_t(c)].squaredNorm();
+      ok = along > 0 && norm_squared > DEGENERATE * DEGENERATE * scale_squared[std::size_t(c)];
+      least_squared = std::min(least_squared, along * along / norm_squared);
+    }
+    const Scalar least = ok ? std::sqrt(least_squared) : 0;
+    ok = ok && least > CONE_MARGIN;
+    m.axis[std::size_t(index)] = axis;
+    m.cos[std::size_t(index)] = least;
+    m.sin[std::size_t(index)] = std::sqrt(std::max(Scalar(0), 1 - least * least));
+    m.cone_ok[std::size_t(index)] = ok;
+  };
+  // Their triangles' boxes, and the leaves' boxes.
+  const auto leaf_boxes = [&](std::int32_t index) {
+    const Node& node = nodes_[std::size_t(index)];
+    Aabb box;
+    for (std::int32_t k = 0; k < node.count; ++k) {
+      Aabb& b = m.triangle_box[std::size_t(node.first + k)];
+      b = swept_box(triangles_[std::size_t(order_[std::size_t(node.first + k)])], start, end, margin);
+      box = k == 0 ? b : merged(box, b);
+    }
+    m.box[std::size_t(index)] = box;
+  };
+  const auto for_leaves = [&](const auto& body) {
+    if (threads > 1) {
+      tbb::task_arena arena(threads);
+      arena.execute([&] {
+        tbb::parallel_for(tbb::blocked_range<std::size_t>(0, leaves.size(), 64), [&](const auto& r) {
+          for (std::size_t i = r.begin(); i < r.end(); ++i) body(leaves[i]);
+        });
+      });
+    } else {
+      for (std::int32_t index : leaves) body(index);
+    }
+  };
+  for_leaves(leaf);
+  // The inner nodes, children first (they follow their parent): merged boxes, and a cone about
+  // the summed axis wide enough for both children's cones (angles add).
+  for (std::size_t i = nodes; i-- > 0;) {
+    const Node& node = nodes_[i];
+    if (node.right < 0) continue;
+    const std::size_t l = i + 1, r = std::size_t(node.right);
+    m.sum[i] = m.sum[l] + m.sum[r];
+    const Scalar length = m.sum[i].norm();
+    bool ok = m.cone_ok[l] && m.cone_ok[r] && length > 0;
+    const Vec3 axis = ok ? Vec3(m.sum[i] / length) : Vec3::UnitZ();
+    Scalar least = 1;
+    for (std::size_t c : {l, r}) {
+      if (!ok) break;
+      const Scalar cos_apart = m.axis[c].dot(axis), sin_apart = m.axis[c].cross(axis).norm();
+      ok = cos_apart > 0;
+      least = std::min(least, m.cos[c] * cos_apart - m.sin[c] * sin_apart);
+    }
+    ok = ok && least > CONE_MARGIN;
+    m.axis[i] = axis;
+    m.cos[i] = least;
+    m.sin[i] = std::sqrt(std::max(Scalar(0), 1 - least * least));
+    m.cone_ok[i] = ok;
+  }
+  SelfCullCounters local;
+  const auto report = [&] {
+    if (!counters) return;
+    counters->patches_tested += local.patches_tested;
+    counters->patches_culled += local.patches_culled;
+    counters->triangles_culled += local.triangles_culled;
+  };
+  // A root proven free (a flat or gently curved sheet) needs no boxes at all.
+  if (culled(m, 0, local)) {
+    report();
+    return out;
+  }
+  for_leaves(leaf_boxes);
+  for (std::size_t i = nodes; i-- > 0;)
+    if (nodes_[i].right >= 0) m.box[i] = merged(m.box[i + 1], m.box[std::size_t(nodes_[i].right)]);
+  if (threads <= 1) {
+    own(m, 0, out, local);
+  } else {
+    // The top of the tree serially down to nodes of TASK_TRIANGLES, then each such node's own
+    // pairs and each pair of such nodes met on the way as a task; joined in task order.
+    struct Task {
+      std::int32_t a, b;  // b < 0: a's own pairs
+    };
+    std::vector<Task> tasks;
+    const auto split = [&](auto&& split, std::int32_t index) -> void {
+      if (index != 0 && culled(m, index, local)) return;  // the root is known not culled
+      const Node& node = nodes_[std::size_t(index)];
+      if (node.right < 0 || node.count < TASK_TRIANGLES) {
+        tasks.push_back({index, -1});
+        return;
+      }
+      split(split, index + 1);
+      split(split, node.right);
+      tasks.push_back({index + 1, node.right});
+    };
+    split(split, 0);
+    std::vector<Pairs> found(tasks.size());
+    std::vector<SelfCullCounters> task_counters(tasks.size());
+    tbb::task_arena arena(threads);
+    arena.execute([&] {
+      tbb::parallel_for(std::size_t(0), tasks.size(), [&](std::size_t k) {
+        if (tasks[k].b < 0) own(m, tasks[k].a, found[k], task_counters[k]);
+        else across(m, tasks[k].a, tasks[k].b, found[k]);
+      });
+    });
+    for (std::size_t k = 0; k < tasks.size(); ++k) {
+      out.insert(out.end(), found[k].begin(), found[k].end());
+      local.patches_tested += task_counters[k].patches_tested;
+      local.patches_culled += task_counters[k].patches_culled;
+      local.triangles_culled += task_counters[k].triangles_culled;
+    }
+  }
+  std::sort(out.begin(), out.end());
+  report();
+  return out;
+}
+
+}  // namespace drape::ccd
