@@ -161,6 +161,24 @@ TEST(PatchTree, ASheetThatCoversItselfTwiceIsNeverCulled) {
   EXPECT_GT(expect_no_contact_lost(s, 0.01), 0u);
 }
 
+TEST(PatchTree, AStripCurledThroughItselfIsNeverCulled) {
+  // A straight strip ending in a curl of 1.15 turns, the curl a gentle ramp turned downwards
+  // during the step, so its turns pass through each other. Every normal stays near the
+  // vertical and the rim winds once around its centre (in the straight part); the curl's
+  // rim turns the other way round that centre (a negative signed area), which is what keeps it.
+  const Scalar straight = 6, curl = 2 * std::numbers::pi * 1.15, pitch = 0.4, width = 0.4;
+  const Sheet s = grid(60, 3, [&](Scalar u, Scalar v) {
+    const Scalar along = u / 60 * (straight + curl), across = (v / 3 - 0.5) * width;
+    const Scalar theta = std::max(Scalar(0), along - straight);  // the curl's radius is 1
+    const Vec3 centre = along < straight ? Vec3(along - straight, 0, 0) : Vec3(std::sin(theta), 1 - std::cos(theta), 0);
+    const Vec3 left(-std::sin(theta), std::cos(theta), 0);
+    const Vec3 p = centre + across * left, rise(0, 0, pitch * theta / (2 * std::numbers::pi));
+    return std::pair{Vec3(p + rise), Vec3(p - rise)};
+  });
+  EXPECT_FALSE(culled_pairs(s, 0.01).pairs.empty());
+  EXPECT_GT(expect_no_contact_lost(s, 0.01), 10u);
+}
+
 TEST(PatchTree, ACrumpledSheetKeepsEveryContact) {
   // Random heights and random motions, many times the spacing: a sheet through itself
   // everywhere, at three seeds.
