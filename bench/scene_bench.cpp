@@ -12,8 +12,12 @@
 #include <chrono>
 #include <cstdio>
 #include <filesystem>
+#include <memory>
+#include <tuple>
 
+#include "drape/ccd/broad_phase.h"
 #include "drape/ccd/evaluation.h"
+#include "drape/ccd/patch_tree.h"
 #include "drape/ccd/query_file.h"
 #include "drape/core/integrator.h"
 #include "drape/core/penetration.h"
@@ -100,6 +104,75 @@ std::array<MethodRun, N> time_methods(const Frame& frame, const std::array<Timed
   return runs;
 }
 
+// The self-collision broad phase of the frame's rounds, both ways, on the identical motions:
+// the btDbvt over every triangle against itself (what every round did before the patch tree)
+// and the patch tree with its culling, each through feature_pairs to the elementary tests.
+struct SelfBroadPhase {
+  double dbvt_ms = 0, patch_ms = 0;  // medians over the passes of the frame's rounds
+  std::size_t dbvt_tests = 0, patch_tests = 0;
+  long dbvt_pairs = 0, patch_pairs = 0;
+  long dbvt_hits = 0, lost_hits = 0;  // vincent's hits among the btDbvt's tests; of those, not among the patch tree's
+};
+
+SelfBroadPhase time_self_broad_phase(const Frame& frame, const Model& model, int passes) {
+  SelfBroadPhase out;
+  std::vector<ccd::TriangleIndices> triangles;
+  for (const Triangle& t : model.triangles) triangles.push_back({t[0], t[1], t[2]});
+  const Scalar margin = model.scene.collisions.thickness;
+  ccd::PatchTree patches(triangles, model.initial_positions);
+  ccd::BoxTree tree;  // built untimed on the first round; each timed round updates it in place, as a run does
+  if (!frame.batches.empty()) {
+    std::vector<ccd::Aabb> boxes(triangles.size());
+    for (std::size_t i = 0; i < triangles.size(); ++i)
+      boxes[i] = ccd::swept_box(triangles[i], frame.batches[0].start, frame.batches[0].end, margin);
+    tree.update(boxes);
+  }
+  std::vector<double> dbvt_ms, patch_ms;
+  const auto since = [](auto begin) { return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - begin).count(); };
+  // feature_pairs sorts its tests by these keys.
+  const auto vf_less = [](const ccd::VertexFacePair& a, const ccd::VertexFacePair& b) {
+    return std::tie(a.vertex, a.face) < std::tie(b.vertex, b.face);
+  };
+  const auto ee_less = [](const ccd::EdgeEdgePair& a, const ccd::EdgeEdgePair& b) {
+    return std::tie(a.edge_a, a.edge_b) < std::tie(b.edge_a, b.edge_b);
+  };
+  for (int p = 0; p < passes; ++p) {
+    double dbvt = 0, patch = 0;
+    for (const Batch& b : frame.batches) {
+      auto begin = std::chrono::steady_clock::now();
+      std::vector<ccd::Aabb> boxes(triangles.size());
+      for (std::size_t i = 0; i < triangles.size(); ++i) boxes[i] = ccd::swept_box(triangles[i], b.start, b.end, margin);
+      tree.update(boxes);
+      const auto dbvt_pairs = tree.self_pairs();
+      const auto volumes = ccd::vertex_volumes(b.start, b.end, margin);
+      const ccd::Candidates all = ccd::feature_pairs(triangles, triangles, dbvt_pairs, volumes);
+      dbvt += since(begin);
+      begin = std::chrono::steady_clock::now();
+      const auto patch_pairs = patches.self_pairs(b.start, b.end, margin);
+      const ccd::Candidates kept =
+          patch_pairs.empty() ? ccd::Candidates{}
+                              : ccd::feature_pairs(triangles, triangles, patch_pairs, ccd::vertex_volumes(b.start, b.end, margin));
+      patch += since(begin);
+      if (p > 0) continue;
+      out.dbvt_pairs += long(dbvt_pairs.size()), out.patch_pairs += long(patch_pairs.size());
+      out.dbvt_tests += all.vertex_face.size() + all.edge_edge.size();
+      out.patch_tests += kept.vertex_face.size() + kept.edge_edge.size();
+      // Every contact the btDbvt's tests give must be among the patch tree's (both sorted).
+      const ccd::BatchOutput hits = ccd::run_batch({b.start, b.end, all.vertex_face, all.edge_edge}, ccd::Options{}, 1);
+      for (const auto& h : hits.vertex_face)
+        out.lost_hits += !std::binary_search(kept.vertex_face.begin(), kept.vertex_face.end(), all.vertex_face[h.index], vf_less);
+      for (const auto& h : hits.edge_edge)
+        out.lost_hits += !std::binary_search(kept.edge_edge.begin(), kept.edge_edge.end(), all.edge_edge[h.index], ee_less);
+      out.dbvt_hits += long(hits.vertex_face.size() + hits.edge_edge.size());
+    }
+    dbvt_ms.push_back(dbvt);
+    patch_ms.push_back(patch);
+  }
+  out.dbvt_ms = ccd::median(dbvt_ms);
+  out.patch_ms = ccd::median(patch_ms);
+  return out;
+}
+
 // Where test i of a frame lives: its batch, kind and index there.
 struct Located {
   const Batch* batch;
@@ -168,7 +241,7 @@ int main(int argc, char** argv) {
   int frames = 0, every = 1, passes = 3, threads = 1, dump_frame_number = 0;
   int separation_depth = ccd::Options{}.separation_depth;
   std::size_t dump_limit = 200000;
-  bool check = false, no_feature_boxes = false;
+  bool check = false, no_feature_boxes = false, twin = false;
   app.add_option("scene", scene_path, "Scene file")->required()->check(CLI::ExistingFile);
   app.add_option("--frames", frames, "Frames to run (default: the scene's)")->check(CLI::PositiveNumber);
   app.add_option("--every", every, "Measure every K-th frame")->capture_default_str()->check(CLI::PositiveNumber);
@@ -184,6 +257,10 @@ int main(int argc, char** argv) {
       ->capture_default_str()
       ->check(CLI::Range(0, 6));
   app.add_flag("--check", check, "Run the independent penetration check on every frame");
+  app.add_flag("--vs-btdbvt", twin,
+               "With self-collision: also run the scene with collisions.self_culling off (every round's self pairs from "
+               "the btDbvt, as before the patch tree), frame by frame alternating with the main run, and print both "
+               "frames' times; at measured frames also time both self-collision broad phases on the identical rounds");
   app.add_flag("--no-feature-boxes", no_feature_boxes,
                "Keep every feature pair of overlapping triangles (the paper's 15 tests per triangle pair)");
   app.add_option("--dump-ccd", dump_dir,
@@ -195,18 +272,26 @@ int main(int argc, char** argv) {
       ->check(CLI::PositiveNumber);
   CLI11_PARSE(app, argc, argv);
 
-  Model model;
+  Model model, twin_model;
   try {
     Scene scene = load_scene(scene_path);
     if (no_feature_boxes) scene.collisions.feature_boxes = false;
     model = build_model(scene);
+    scene.collisions.self_culling = false;
+    if (twin) twin_model = build_model(scene);
   } catch (const SceneError& e) {
     std::fprintf(stderr, "scene_bench: %s\n", e.what());
     return 2;
   }
   if (frames <= 0) frames = model.scene.frames;
+  if (twin && !(model.scene.collisions.self && model.scene.collisions.self_culling)) {
+    std::fprintf(stderr, "scene_bench: --vs-btdbvt needs a scene with self-collision and self_culling on\n");
+    return 2;
+  }
   State state = initial_state(model);
   Integrator integrator(model, threads);
+  State twin_state = twin ? initial_state(twin_model) : State{};
+  std::unique_ptr<Integrator> twin_integrator = twin ? std::make_unique<Integrator>(twin_model, threads) : nullptr;
   if (!integrator.collisions()) {
     std::fprintf(stderr, "scene_bench: %s has no collision pipeline (no self-collision, no mesh obstacle)\n",
                  scene_path.c_str());
@@ -234,11 +319,17 @@ int main(int argc, char** argv) {
               "tests", "dnf%", "vin%", "vin%nc", "cubic_ms", "dnf_ms", "vin_ms", "cons_ms", "paper_ms", "vin/cub", "vin/dnf",
               "cons/vin", "pap/cub",
               "hits", "diff", "c-miss", "step_ms", "broad_ms", "pen");
+  if (twin)
+    std::printf("      with --vs-btdbvt, a second line: the run without self_culling (its step_ms), whether its state is still "
+                "the same, and both self-collision broad phases on this frame's rounds (btDbvt, patch tree, ms, pairs, "
+                "tests, and vincent's hits of the btDbvt's tests not among the patch tree's)\n");
   struct Measured {
     int frame;
     std::size_t tests, hits, culled_vincent;
     double ms[5];
     double broad_ms;  // the simulation's broad phase over the frame (all its steps and rounds)
+    double step_ms = 0, twin_step_ms = 0;
+    SelfBroadPhase self;
   };
   std::vector<Measured> measured;
   long disagreements = 0, beyond_conservative_total = 0, penetrations = 0;
@@ -259,6 +350,19 @@ int main(int argc, char** argv) {
     }
     const double step_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - frame_begin).count() /
                            model.scene.frame_steps;
+    double twin_step_ms = 0;
+    bool same = false;
+    if (twin) {
+      const auto twin_begin = std::chrono::steady_clock::now();
+      for (int step = 0; step < model.scene.frame_steps; ++step)
+        if (const StepReport r = twin_integrator->step(twin_state); !r.ok) {
+          std::printf("the run without self_culling stopped at frame %d: %s\n", f, r.failure.c_str());
+          return 3;
+        }
+      twin_step_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - twin_begin).count() /
+                     model.scene.frame_steps;
+      same = twin_state.positions == state.positions && twin_state.velocities == state.velocities;
+    }
     int found = 0;
     if (check) penetrations += found = int(find_penetrations(model, state.positions, state.time).size());
     if (f % every != 0) continue;
@@ -303,8 +407,18 @@ int main(int argc, char** argv) {
                 runs[PAPER].ms, runs[CUBIC].ms / runs[VINCENT].ms, runs[DNF].ms / runs[VINCENT].ms,
                 runs[CONSERVATIVE].ms / runs[VINCENT].ms, runs[CUBIC].ms / runs[PAPER].ms,
                 hits, diff, near, step_ms, broad_ms, check ? std::to_string(found).c_str() : "-");
+    Measured row{f, n, hits, culled, {runs[0].ms, runs[1].ms, runs[2].ms, runs[3].ms, runs[PAPER].ms}, broad_ms, 0, 0, {}};
+    if (twin) {
+      row.step_ms = step_ms, row.twin_step_ms = twin_step_ms;
+      row.self = time_self_broad_phase(current, model, passes);
+      std::printf("      without culling: step_ms %.1f (%.2fx this run's), state %s; self broad phase: btDbvt %.1f ms "
+                  "(%ld pairs, %zu tests), patch tree %.1f ms (%ld pairs, %zu tests), %.1fx; hits %ld, lost %ld\n",
+                  twin_step_ms, twin_step_ms / step_ms, same ? "the same" : "differs", row.self.dbvt_ms, row.self.dbvt_pairs,
+                  row.self.dbvt_tests, row.self.patch_ms, row.self.patch_pairs, row.self.patch_tests,
+                  row.self.dbvt_ms / row.self.patch_ms, row.self.dbvt_hits, row.self.lost_hits);
+    }
     std::fflush(stdout);
-    measured.push_back({f, n, hits, culled, {runs[0].ms, runs[1].ms, runs[2].ms, runs[3].ms, runs[PAPER].ms}, broad_ms});
+    measured.push_back(row);
     if (!dump_dir.empty() && (dump_frame_number == f || (dump_frame_number == 0 && n > dump.tests()))) dump = std::move(current);
   }
   if (measured.empty()) {
@@ -317,7 +431,8 @@ int main(int argc, char** argv) {
   std::size_t most = 0;
   for (const auto& m : measured) most = std::max(most, m.tests);
   for (const bool heavy_only : {false, true}) {
-    double ms[5] = {0, 0, 0, 0, 0}, broad = 0;
+    double ms[5] = {0, 0, 0, 0, 0}, broad = 0, step = 0, twin_step = 0, self_dbvt = 0, self_patch = 0;
+    long lost = 0, self_hits = 0;
     std::size_t tests = 0, hits = 0, culled = 0, count = 0, least = SIZE_MAX;
     for (const auto& m : measured) {
       if (heavy_only && m.tests * 10 < most) continue;
@@ -325,6 +440,8 @@ int main(int argc, char** argv) {
       tests += m.tests, hits += m.hits, culled += m.culled_vincent, least = std::min(least, m.tests);
       for (int k = 0; k < 5; ++k) ms[k] += m.ms[k];
       broad += m.broad_ms;
+      step += m.step_ms, twin_step += m.twin_step_ms, self_dbvt += m.self.dbvt_ms, self_patch += m.self.patch_ms;
+      lost += m.self.lost_hits, self_hits += m.self.dbvt_hits;
     }
     std::printf("\n%s (%zu frames, %zu to %zu tests a frame, %zu in all):\n",
                 heavy_only ? "heavy frames, at least a tenth of the most tests" : "all measured frames", count, least,
@@ -341,6 +458,12 @@ int main(int argc, char** argv) {
     std::printf("  vincent culled %.2f%% of all tests and %.2f%% of the tests with no collision (%zu hits)\n",
                 tests ? 100.0 * double(culled) / double(tests) : 0.0,
                 tests > hits ? 100.0 * double(culled) / double(tests - hits) : 0.0, hits);
+    if (twin)
+      std::printf("  without self_culling (btDbvt self pairs), alternating frame by frame: a step %.1f ms against %.1f, "
+                  "%.2fx; the self-collision broad phase on the identical rounds: btDbvt %.1f ms, patch tree %.1f ms, "
+                  "%.2fx; %ld of the btDbvt tests' %ld hits not among the patch tree's\n",
+                  twin_step / count, step / count, twin_step / step, self_dbvt, self_patch, self_dbvt / self_patch, lost,
+                  self_hits);
   }
   std::printf("\n%ld tests where cubic, dnf or the paper's filter alone disagree with vincent; %ld hits of vincent that conservative does not report "
               "(c-miss: contact within the root-finders' tolerance, not exact contact)%s\n",

@@ -135,7 +135,10 @@ std::int32_t PatchTree::build(std::vector<std::int32_t>& set, BuildScratch& scra
     const auto f = std::int64_t(set.size());
     const std::int64_t e = (3 * f + std::int64_t(boundary)) / 2;
     if (simple && boundary >= 3 && v - e + f == 1) {
-      std::vector<std::int32_t> cycle{next.begin()->first};
+      // Started at its least vertex, so that the order of its sums is the same everywhere.
+      std::int32_t first = next.begin()->first;
+      for (const auto& [v, after] : next) first = std::min(first, v);
+      std::vector<std::int32_t> cycle{first};
       for (auto at = next.find(cycle.back()); at != next.end() && at->second != cycle.front() && cycle.size() <= boundary;
            at = next.find(cycle.back()))
         cycle.push_back(at->second);
@@ -210,8 +213,9 @@ bool PatchTree::culled(const Motion& m, std::int32_t index, SelfCullCounters& co
   centre0 /= Scalar(contour.size());
   centre1 /= Scalar(contour.size());
   const Vec3& d = m.axis[std::size_t(index)];
-  // u and w span the plane across d; the contour winds once when one edge crosses the ray
-  // along u (every edge turning counter-clockwise by less than half a turn).
+  // u and w span the plane across d. Once every edge is known to turn counter-clockwise about
+  // the centre by less than half a turn, the edges whose w goes from negative to non-negative
+  // are those crossing the ray along u, and their number is the contour's winding number.
   const Vec3 u = d.cross(std::abs(d.x()) < 0.9 ? Vec3::UnitX() : Vec3::UnitY()).normalized();
   const Vec3 w = d.cross(u);
   int crossings = 0;

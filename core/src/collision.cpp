@@ -368,8 +368,9 @@ struct CollisionPipeline::Impl {
     const Scalar floor = 0.5 * model.scene.collisions.thickness;
     for (const Obstacle& obstacle : model.obstacles) {
       if (obstacle.spec.kind == ObstacleSpec::Kind::Mesh) continue;
+      const PosedShape shape = pose_shape(obstacle, t_next);
       for (int v = 0; v < cloth_vertices; ++v)
-        if (inverse_mass[v] > 0) push_out(obstacle, t_next, start[v], h, floor, motion[v]);
+        if (inverse_mass[v] > 0) push_out(shape, t_next, start[v], h, floor, motion[v]);
     }
   }
 

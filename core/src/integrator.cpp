@@ -198,10 +198,11 @@ int respond_to_analytic_obstacles(const Model& model, const std::vector<Vec3>& s
   int contacts = 0;
   for (const Obstacle& obstacle : model.obstacles) {
     if (obstacle.spec.kind == ObstacleSpec::Kind::Mesh) continue;  // the collision pipeline's
+    const PosedShape shape = pose_shape(obstacle, t_next);
     for (std::size_t v = 0; v < start.size(); ++v) {
       if (model.pin_of_vertex[v] >= 0) continue;
       const Vec3 before = motion[v];
-      const auto contact = push_out(obstacle, t_next, start[v], h, thickness, motion[v]);
+      const auto contact = push_out(shape, t_next, start[v], h, thickness, motion[v]);
       if (!contact) continue;
       ++contacts;
       const SurfaceContact& c = *contact;
@@ -393,10 +394,11 @@ void Integrator::find_contacts(const State& state) {
   const Scalar reach = CONTACT_REACH * thickness;
   for (const Obstacle& obstacle : m.obstacles) {
     if (obstacle.spec.kind == ObstacleSpec::Kind::Mesh) continue;
+    const PosedShape shape = pose_shape(obstacle, state.time);
     for (std::size_t v = 0; v < state.positions.size(); ++v) {
       if (w.free_index[v] < 0) continue;
-      const SurfaceContact c = analytic_contact(obstacle, state.time, state.positions[v]);
-      if (!(c.signed_distance < reach)) continue;
+      if (!(shape.distance(state.positions[v]).first < reach)) continue;
+      const SurfaceContact c = analytic_contact(shape, state.time, state.positions[v]);
       SolveContact contact;
       contact.vertex = {int(v), -1, -1};
       contact.weight = {1, 0, 0};

@@ -94,16 +94,22 @@ TriangleMesh mesh_of(const Assimp::Importer& importer, const aiScene* scene, con
   return mesh;
 }
 
-// A Wavefront OBJ of the mesh, every coordinate with 17 significant digits so that it reads
-// back as the same double: assimp's exporter writes single precision.
+// A Wavefront OBJ of the mesh, every coordinate in the shortest form that reads back as the
+// same double (std::to_chars; assimp's exporter writes single precision).
 std::string obj_text(const TriangleMesh& mesh) {
   std::string text = "# drape frame: " + std::to_string(mesh.vertices.size()) + " vertices, " +
                      std::to_string(mesh.triangles.size()) + " triangles\n";
   text.reserve(text.size() + mesh.vertices.size() * 72 + mesh.triangles.size() * 24);
   char line[128];
   for (const Vec3& v : mesh.vertices) {
-    const int n = std::snprintf(line, sizeof line, "v %.17g %.17g %.17g\n", v.x(), v.y(), v.z());
-    text.append(line, std::size_t(n));
+    char* at = line;
+    *at++ = 'v';
+    for (int k = 0; k < 3; ++k) {
+      *at++ = ' ';
+      at = std::to_chars(at, line + sizeof line, v[k]).ptr;
+    }
+    *at++ = '\n';
+    text.append(line, std::size_t(at - line));
   }
   for (const Triangle& t : mesh.triangles) {
     const int n = std::snprintf(line, sizeof line, "f %d %d %d\n", t[0] + 1, t[1] + 1, t[2] + 1);

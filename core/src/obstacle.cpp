@@ -20,11 +20,15 @@ PosedShape pose_shape(const Obstacle& obstacle, Scalar t) {
   return {&obstacle, false, point, (s.motion.position(s.point + s.normal, t) - point).normalized(), 0};
 }
 
-SurfaceContact analytic_contact(const Obstacle& obstacle, Scalar t, const Vec3& x) {
+SurfaceContact analytic_contact(const PosedShape& shape, Scalar t, const Vec3& x) {
   SurfaceContact out;
-  std::tie(out.signed_distance, out.normal) = pose_shape(obstacle, t).distance(x);
-  out.surface_velocity = body_velocity(obstacle.spec.motion, x - out.signed_distance * out.normal, t);
+  std::tie(out.signed_distance, out.normal) = shape.distance(x);
+  out.surface_velocity = body_velocity(shape.obstacle->spec.motion, x - out.signed_distance * out.normal, t);
   return out;
+}
+
+SurfaceContact analytic_contact(const Obstacle& obstacle, Scalar t, const Vec3& x) {
+  return analytic_contact(pose_shape(obstacle, t), t, x);
 }
 
 std::vector<Vec3> posed_vertices(const Obstacle& obstacle, Scalar t) {
@@ -37,7 +41,8 @@ std::vector<Vec3> posed_vertices(const Obstacle& obstacle, Scalar t) {
 Scalar distance_to_obstacle(const Obstacle& obstacle, Scalar t, const std::vector<Vec3>& points) {
   Scalar best = std::numeric_limits<Scalar>::infinity();
   if (obstacle.spec.kind != ObstacleSpec::Kind::Mesh) {
-    for (const Vec3& p : points) best = std::min(best, analytic_contact(obstacle, t, p).signed_distance);
+    const PosedShape shape = pose_shape(obstacle, t);
+    for (const Vec3& p : points) best = std::min(best, shape.distance(p).first);
     return best;
   }
   const std::vector<Vec3> v = posed_vertices(obstacle, t);
@@ -48,11 +53,11 @@ Scalar distance_to_obstacle(const Obstacle& obstacle, Scalar t, const std::vecto
   return std::sqrt(best);
 }
 
-std::optional<SurfaceContact> push_out(const Obstacle& obstacle, Scalar t_next, const Vec3& start, Scalar h, Scalar depth,
+std::optional<SurfaceContact> push_out(const PosedShape& shape, Scalar t_next, const Vec3& start, Scalar h, Scalar depth,
                                        Vec3& motion) {
   const Vec3 predicted = start + h * motion;
-  const SurfaceContact c = analytic_contact(obstacle, t_next, predicted);
-  if (c.signed_distance >= depth) return std::nullopt;
+  if (!(shape.distance(predicted).first < depth)) return std::nullopt;
+  const SurfaceContact c = analytic_contact(shape, t_next, predicted);
   motion = (predicted + (depth - c.signed_distance) * c.normal - start) / h;
   return c;
 }

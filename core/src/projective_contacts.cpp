@@ -73,7 +73,7 @@ Scalar ProjectiveSolver::contact_terms(const std::vector<Vec3>& x, std::vector<V
         const Scalar impulse = stiffness * depth / h;  // the term's force is its gradient over h^2
         contact_impulse_[v] += impulse;
         if (shape.obstacle->spec.motion.moves())
-          contact_work_ += impulse * normal.dot(analytic_contact(*shape.obstacle, c->t_end, x[v]).surface_velocity);
+          contact_work_ += impulse * normal.dot(analytic_contact(shape, c->t_end, x[v]).surface_velocity);
       }
     }
   }

@@ -218,9 +218,12 @@ TEST(PatchTree, TheSamePairsForAnyThreadCount) {
   });
   const Outcome one = culled_pairs(s, 0.1, 1), two = culled_pairs(s, 0.1, 2), four = culled_pairs(s, 0.1, 4);
   ASSERT_FALSE(one.pairs.empty());
-  EXPECT_EQ(one.pairs, two.pairs);
-  EXPECT_EQ(one.pairs, four.pairs);
-  EXPECT_EQ(one.counters.triangles_culled, two.counters.triangles_culled);
+  for (const Outcome* other : {&two, &four}) {
+    EXPECT_EQ(one.pairs, other->pairs);
+    EXPECT_EQ(one.counters.triangles_culled, other->counters.triangles_culled);
+    EXPECT_EQ(one.counters.patches_culled, other->counters.patches_culled);
+    EXPECT_EQ(one.counters.patches_tested, other->counters.patches_tested);
+  }
 }
 
 TEST(PatchTree, OnlyConsistentlyWoundDisksAreCulled) {
@@ -249,3 +252,54 @@ TEST(PatchTree, OnlyConsistentlyWoundDisksAreCulled) {
   EXPECT_FALSE(culled_pairs(flipped, 0.01).pairs.empty());
 }
 
+
+TEST(PatchTree, TwoSheetsThroughEachOtherKeepEveryContact) {
+  // Two flat sheets, one mesh: each is one culled patch, and the upper one falls through the
+  // lower (tilted, so that no corner lands on an edge).
+  Sheet s = grid(10, 10, [](Scalar u, Scalar v) { return std::pair{Vec3(u, v, 0), Vec3(u, v, 0)}; });
+  const Sheet upper = grid(6, 6, [](Scalar u, Scalar v) {
+    const Vec3 p(2.3 + u + 0.1 * v, 2.1 + v, 1 + 0.05 * u);
+    return std::pair{p, Vec3(p - Vec3(0, 0, 2))};
+  });
+  const auto offset = std::int32_t(s.start.size());
+  s.start.insert(s.start.end(), upper.start.begin(), upper.start.end());
+  s.end.insert(s.end.end(), upper.end.begin(), upper.end.end());
+  for (TriangleIndices t : upper.triangles) s.triangles.push_back({t[0] + offset, t[1] + offset, t[2] + offset});
+  const Outcome o = culled_pairs(s, 0.01);
+  EXPECT_EQ(o.counters.triangles_culled, long(s.triangles.size()));  // each sheet whole
+  EXPECT_GT(expect_no_contact_lost(s, 0.01), 10u);
+}
+
+TEST(PatchTree, BrokenMeshesAreNeverCulledWhereTheyAreBroken) {
+  // A flat sheet falling, made non-manifold four ways; the broken part's patches fail, the
+  // rest may be culled, and nothing is lost (checked against the btDbvt on a sheet that also
+  // folds a corner through itself).
+  const auto sheet = [] {
+    return grid(8, 8, [](Scalar u, Scalar v) {
+      const Scalar beyond = 3 - u - v;  // the corner, folded over along u + v = 3 and pushed through
+      if (beyond <= 0) return std::pair{Vec3(u, v, 0), Vec3(u, v, -0.1)};
+      const Vec3 folded(3 - v, 3 - u, 0.5 * std::min(Scalar(1), beyond));
+      return std::pair{folded, Vec3(folded - Vec3(0, 0, 1.2 * std::min(Scalar(1), beyond)))};
+    });
+  };
+  Sheet duplicated = sheet();
+  duplicated.triangles.push_back(duplicated.triangles[70]);  // one triangle twice
+  Sheet degenerate = sheet();
+  degenerate.triangles.push_back({40, 40, 41});  // a triangle with a repeated corner
+  Sheet fin = sheet();
+  fin.start.push_back(Vec3(4.5, 4.5, 1));
+  fin.end.push_back(Vec3(4.5, 4.5, 0.9));
+  fin.triangles.push_back({40, 41, std::int32_t(fin.start.size() - 1)});  // a third triangle on an edge
+  Sheet pinched = sheet();
+  // Two sheets sharing one corner (a pinched vertex): the second a small flap off vertex 80.
+  pinched.start.push_back(Vec3(8.5, 8.5, 0.3));
+  pinched.end.push_back(Vec3(8.5, 8.5, 0.2));
+  pinched.start.push_back(Vec3(9, 8.2, 0.3));
+  pinched.end.push_back(Vec3(9, 8.2, 0.2));
+  pinched.triangles.push_back({80, std::int32_t(pinched.start.size() - 2), std::int32_t(pinched.start.size() - 1)});
+  for (const Sheet* s : {&duplicated, &degenerate, &fin, &pinched}) {
+    const Outcome o = culled_pairs(*s, 0.01);
+    EXPECT_LT(o.counters.triangles_culled, long(s->triangles.size()));
+    EXPECT_GT(expect_no_contact_lost(*s, 0.01), 0u);
+  }
+}

@@ -36,13 +36,16 @@ struct PosedShape {
 /// Sphere or plane (not a mesh) at time t.
 PosedShape pose_shape(const Obstacle& obstacle, Scalar t);
 
-/// Sphere or plane at time t, seen from x.
+/// Sphere or plane posed at time t, seen from x.
+SurfaceContact analytic_contact(const PosedShape& shape, Scalar t, const Vec3& x);
+
+/// Sphere or plane at time t, seen from x (posing it for this one point).
 SurfaceContact analytic_contact(const Obstacle& obstacle, Scalar t, const Vec3& x);
 
-/// A vertex at start moving by h * motion over a step ending at t_next: when its end lies
-/// within depth of an analytic obstacle's surface, motion is changed so that it ends at depth
-/// along the surface normal, and the contact there is returned.
-std::optional<SurfaceContact> push_out(const Obstacle& obstacle, Scalar t_next, const Vec3& start, Scalar h, Scalar depth,
+/// A vertex at start moving by h * motion over a step ending at t_next (the shape posed at
+/// t_next): when its end lies within depth of the shape's surface, motion is changed so that it
+/// ends at depth along the surface normal, and the contact there is returned.
+std::optional<SurfaceContact> push_out(const PosedShape& shape, Scalar t_next, const Vec3& start, Scalar h, Scalar depth,
                                        Vec3& motion);
 
 /// The velocity at time t of the obstacle's body point now at x (translation plus rotation).

@@ -198,7 +198,8 @@ struct CollisionSpec {
   bool feature_boxes = true;
   /// Self-collision: leave out the pairs inside patches of cloth proven free of self-contact
   /// over the step by a continuous normal cone and a contour test (ccd::PatchTree). Changes the
-  /// cost and the proximity pairs inside such patches, never whether a collision is found.
+  /// cost, and drops pairs inside such patches that never touch (their proximity repulsion, and
+  /// near misses the narrow phase would report within its tolerance); never a contact.
   bool self_culling = true;
 };
 
