@@ -117,9 +117,12 @@ std::vector<std::pair<std::int32_t, std::int32_t>> BoxTree::pairs_with(const Box
 
 Candidates feature_pairs(std::span<const TriangleIndices> triangles_a, std::span<const TriangleIndices> triangles_b,
                          std::span<const std::pair<std::int32_t, std::int32_t>> pairs,
-                         std::span<const FeatureVolume> vertex_volumes, int threads) {
+                         std::span<const FeatureVolume> vertex_volumes, int threads, std::span<const std::uint8_t> moved) {
   Candidates out;
   const bool cull = !vertex_volumes.empty();
+  const auto any_moved = [&](std::int32_t a, std::int32_t b, std::int32_t c, std::int32_t d) {
+    return moved.empty() || moved[std::size_t(a)] || moved[std::size_t(b)] || moved[std::size_t(c)] || moved[std::size_t(d)];
+  };
   const auto union_of = [&](std::span<const std::int32_t> vertices) {
     FeatureVolume volume = vertex_volumes[vertices[0]];
     for (std::size_t k = 1; k < vertices.size(); ++k) volume.merge(vertex_volumes[vertices[k]]);
@@ -161,7 +164,8 @@ Candidates feature_pairs(std::span<const TriangleIndices> triangles_a, std::span
     ee.reserve((end - begin) * 9);
     const auto add_vertex_face = [&](const TriangleIndices& from, const TriangleIndices& face, const FeatureVolume* face_volume) {
       for (std::int32_t v : from)
-        if (!shares(v, face) && (!cull || overlap(vertex_volumes[v], *face_volume))) vf.push_back({v, face[0], face[1], face[2]});
+        if (!shares(v, face) && any_moved(v, face[0], face[1], face[2]) && (!cull || overlap(vertex_volumes[v], *face_volume)))
+          vf.push_back({v, face[0], face[1], face[2]});
     };
     for (std::size_t p = begin; p < end; ++p) {
       const auto& [ia, ib] = pairs[p];
@@ -177,7 +181,7 @@ Candidates feature_pairs(std::span<const TriangleIndices> triangles_a, std::span
         for (int j = 0; j < 3; ++j) {
           std::array<std::int32_t, 2> f{b[j], b[(j + 1) % 3]};
           if (f[0] > f[1]) std::swap(f[0], f[1]);
-          if (e[0] == f[0] || e[0] == f[1] || e[1] == f[0] || e[1] == f[1]) continue;
+          if (e[0] == f[0] || e[0] == f[1] || e[1] == f[0] || e[1] == f[1] || !any_moved(e[0], e[1], f[0], f[1])) continue;
           if (cull && !overlap(va->edge[i], vb->edge[j])) continue;
           // The same two edges can come from (a, b) or (b, a): order them.
           if (f < e) ee.push_back({f[0], f[1], e[0], e[1]});

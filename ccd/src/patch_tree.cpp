@@ -47,6 +47,14 @@ struct PatchTree::Motion {
   std::vector<Vec3> axis;
   std::vector<Scalar> cos, sin;
   std::vector<char> cone_ok;
+  // Restricted to pairs with a moved triangle (moved vertices given): which triangles (in
+  // order_'s order) and which nodes hold one. Empty: every pair.
+  std::vector<char> triangle_moved, node_moved;
+  bool restricted() const { return !node_moved.empty(); }
+  bool keeps(std::int32_t i, std::int32_t j) const {
+    return !restricted() || triangle_moved[std::size_t(i)] || triangle_moved[std::size_t(j)];
+  }
+  bool holds_moved(std::int32_t node) const { return !restricted() || node_moved[std::size_t(node)]; }
 };
 
 PatchTree::PatchTree(std::span<const TriangleIndices> triangles, std::span<const Vec3> reference)
@@ -237,7 +245,7 @@ bool PatchTree::culled(const Motion& m, std::int32_t index, SelfCullCounters& co
 }
 
 void PatchTree::self(const Motion& m, std::int32_t index, Pairs& out, SelfCullCounters& counters) const {
-  if (!culled(m, index, counters)) own(m, index, out, counters);
+  if (m.holds_moved(index) && !culled(m, index, counters)) own(m, index, out, counters);
 }
 
 void PatchTree::own(const Motion& m, std::int32_t index, Pairs& out, SelfCullCounters& counters) const {
@@ -245,7 +253,7 @@ void PatchTree::own(const Motion& m, std::int32_t index, Pairs& out, SelfCullCou
   if (node.right < 0) {
     for (std::int32_t i = node.first; i < node.first + node.count; ++i)
       for (std::int32_t j = i + 1; j < node.first + node.count; ++j)
-        if (overlap(m.triangle_box[std::size_t(i)], m.triangle_box[std::size_t(j)]))
+        if (m.keeps(i, j) && overlap(m.triangle_box[std::size_t(i)], m.triangle_box[std::size_t(j)]))
           out.emplace_back(std::minmax(order_[std::size_t(i)], order_[std::size_t(j)]));
     return;
   }
@@ -255,12 +263,12 @@ void PatchTree::own(const Motion& m, std::int32_t index, Pairs& out, SelfCullCou
 }
 
 void PatchTree::across(const Motion& m, std::int32_t a, std::int32_t b, Pairs& out) const {
-  if (!overlap(m.box[std::size_t(a)], m.box[std::size_t(b)])) return;
+  if ((!m.holds_moved(a) && !m.holds_moved(b)) || !overlap(m.box[std::size_t(a)], m.box[std::size_t(b)])) return;
   const Node &na = nodes_[std::size_t(a)], &nb = nodes_[std::size_t(b)];
   if (na.right < 0 && nb.right < 0) {
     for (std::int32_t i = na.first; i < na.first + na.count; ++i)
       for (std::int32_t j = nb.first; j < nb.first + nb.count; ++j)
-        if (overlap(m.triangle_box[std::size_t(i)], m.triangle_box[std::size_t(j)]))
+        if (m.keeps(i, j) && overlap(m.triangle_box[std::size_t(i)], m.triangle_box[std::size_t(j)]))
           out.emplace_back(std::minmax(order_[std::size_t(i)], order_[std::size_t(j)]));
     return;
   }
@@ -275,13 +283,31 @@ void PatchTree::across(const Motion& m, std::int32_t a, std::int32_t b, Pairs& o
 
 std::vector<std::pair<std::int32_t, std::int32_t>> PatchTree::self_pairs(std::span<const Vec3> start,
                                                                          std::span<const Vec3> end, Scalar margin,
-                                                                         int threads, SelfCullCounters* counters) {
+                                                                         int threads, SelfCullCounters* counters,
+                                                                         std::span<const std::uint8_t> moved) {
   Pairs out;
   if (nodes_.empty()) return out;
   Motion m;
   m.start = start;
   m.end = end;
   const std::size_t nodes = nodes_.size();
+  if (!moved.empty()) {
+    m.triangle_moved.resize(order_.size());
+    m.node_moved.assign(nodes, 0);
+    for (std::size_t i = nodes; i-- > 0;) {
+      const Node& node = nodes_[i];
+      if (node.right >= 0) {
+        m.node_moved[i] = m.node_moved[i + 1] || m.node_moved[std::size_t(node.right)];
+        continue;
+      }
+      for (std::int32_t k = node.first; k < node.first + node.count; ++k) {
+        const TriangleIndices& t = triangles_[std::size_t(order_[std::size_t(k)])];
+        m.triangle_moved[std::size_t(k)] = moved[std::size_t(t[0])] || moved[std::size_t(t[1])] || moved[std::size_t(t[2])];
+        m.node_moved[i] = m.node_moved[i] || m.triangle_moved[std::size_t(k)];
+      }
+    }
+    if (!m.node_moved[0]) return out;
+  }
   m.triangle_box.resize(order_.size());
   m.box.resize(nodes);
   m.sum.resize(nodes);
@@ -402,7 +428,7 @@ std::vector<std::pair<std::int32_t, std::int32_t>> PatchTree::self_pairs(std::sp
     };
     std::vector<Task> tasks;
     const auto split = [&](auto&& split, std::int32_t index) -> void {
-      if (index != 0 && culled(m, index, local)) return;  // the root is known not culled
+      if (index != 0 && (!m.holds_moved(index) || culled(m, index, local))) return;  // the root is known not culled
       const Node& node = nodes_[std::size_t(index)];
       if (node.right < 0 || node.count < TASK_TRIANGLES) {
         tasks.push_back({index, -1});

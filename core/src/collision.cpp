@@ -6,6 +6,7 @@
 #include <cstdio>
 #include <limits>
 #include <map>
+#include <tuple>
 #include <numeric>
 
 #include "drape/ccd/broad_phase.h"
@@ -76,6 +77,7 @@ double ms_since(Clock::time_point begin) { return std::chrono::duration<double, 
 
 // A contact between four vertices: the relative velocity along normal is sum_k weight_k v_k . n.
 struct Contact {
+  bool vertex_face = true;  // else edge-edge
   std::array<int, 4> vertex{};
   std::array<Scalar, 4> weight{};
   Vec3 normal = Vec3::UnitZ();
@@ -143,8 +145,10 @@ struct CollisionPipeline::Impl {
   }
 
   // Candidate elementary tests for the motion start -> end, boxes grown by margin; the cloth
-  // against itself too when self-collision is on and self is asked for.
-  ccd::Candidates candidates(Scalar margin, CollisionCounters& counters, bool self = true) {
+  // against itself too when self-collision is on and self is asked for; with moved (a flag per
+  // vertex), only the tests with a moved vertex.
+  ccd::Candidates candidates(Scalar margin, CollisionCounters& counters, bool self = true,
+                             std::span<const std::uint8_t> moved = {}) {
     const auto begin = Clock::now();
     ccd::Candidates all;
     const bool self_pairs = self && model.scene.collisions.self;
@@ -164,13 +168,13 @@ struct CollisionPipeline::Impl {
         else features.clear();
         features_ready = true;
       }
-      ccd::Candidates c = ccd::feature_pairs(cloth_triangles, other, pairs, features, settings.threads);
+      ccd::Candidates c = ccd::feature_pairs(cloth_triangles, other, pairs, features, settings.threads, moved);
       all.vertex_face.insert(all.vertex_face.end(), c.vertex_face.begin(), c.vertex_face.end());
       all.edge_edge.insert(all.edge_edge.end(), c.edge_edge.begin(), c.edge_edge.end());
     };
     if (culling) {
       ccd::SelfCullCounters culled;
-      append(cloth_triangles, patch_tree.self_pairs(start, end, margin, settings.threads, &culled));
+      append(cloth_triangles, patch_tree.self_pairs(start, end, margin, settings.threads, &culled, moved));
       counters.culled_triangles += culled.triangles_culled;
     } else if (self_pairs) {
       append(cloth_triangles, cloth_tree.self_pairs());
@@ -291,6 +295,7 @@ struct CollisionPipeline::Impl {
   Contact contact(bool vertex_face, const std::array<int, 4>& v, Scalar toc) const {
     const auto at = [&](int k, Scalar s) -> Vec3 { return start[v[k]] + s * (end[v[k]] - start[v[k]]); };
     Contact c;
+    c.vertex_face = vertex_face;
     c.vertex = v;
     if (vertex_face) {
       const auto closest = ccd::closest_point_triangle<Scalar>(at(0, toc), at(1, toc), at(2, toc), at(3, toc));
@@ -327,13 +332,19 @@ struct CollisionPipeline::Impl {
     return r.hit ? r.toc : toc;
   }
 
-  // One detection round: the collisions of the current motion.
+  // One detection round: the collisions of the current motion. A later round passes the flags
+  // of the vertices whose motion changed since the round before, and that round's hits: the
+  // tests without a moved vertex have the motion that round tested, so its hits among them
+  // stand and only the others are run (the hits in the order a whole round gives them).
   std::vector<std::pair<Contact, Scalar>> detect(Scalar h, const std::vector<Vec3>& motion, CollisionCounters& counters,
-                                                 ccd::Candidates* keep = nullptr) {
+                                                 ccd::Candidates* keep = nullptr,
+                                                 const std::vector<std::uint8_t>* moved = nullptr,
+                                                 const std::vector<std::pair<Contact, Scalar>>* before = nullptr) {
     const auto begin = Clock::now();
     set_end(h, motion);
     const long pairs_before = counters.bvh_pairs;
-    ccd::Candidates c = candidates(model.scene.collisions.thickness, counters);
+    ccd::Candidates c = candidates(model.scene.collisions.thickness, counters, true,
+                                   moved ? std::span<const std::uint8_t>(*moved) : std::span<const std::uint8_t>{});
     const ccd::BatchInput input{start, end, c.vertex_face, c.edge_edge};
     if (observer) observer(input, counters.bvh_pairs - pairs_before);
     const auto narrow_begin = Clock::now();
@@ -352,6 +363,23 @@ struct CollisionPipeline::Impl {
       const auto& p = c.edge_edge[hit.index];
       const Scalar toc = canonical_toc(ccd::QueryKind::EdgeEdge, ccd::gather(input, p), hit.result.toc);
       hits.emplace_back(contact(false, {p.edge_a[0], p.edge_a[1], p.edge_b[0], p.edge_b[1]}, toc), toc);
+    }
+    if (moved && before) {
+      for (const auto& hit : *before)
+        if (std::none_of(hit.first.vertex.begin(), hit.first.vertex.end(), [&](int v) { return (*moved)[std::size_t(v)] != 0; }))
+          hits.push_back(hit);
+      // A whole round lists its vertex-face hits before its edge-edge ones, each kind the
+      // cloth's own tests and then each mesh obstacle's, each of those in sorted order.
+      const auto source = [&](const Contact& contact) {
+        const int highest = *std::max_element(contact.vertex.begin(), contact.vertex.end());
+        int block = 0;
+        for (const MeshObstacle& mo : obstacles) block += highest >= mo.first_vertex;
+        return block;
+      };
+      std::sort(hits.begin(), hits.end(), [&](const auto& a, const auto& b) {
+        return std::make_tuple(!a.first.vertex_face, source(a.first), a.first.vertex) <
+               std::make_tuple(!b.first.vertex_face, source(b.first), b.first.vertex);
+      });
     }
     counters.ccd_hits += long(hits.size());
     counters.ccd_ms += ms_since(begin);
@@ -569,17 +597,26 @@ CollisionCounters CollisionPipeline::resolve(const std::vector<Vec3>& start, Sca
   ccd::Candidates first;
   auto hits = m.detect(h, motion, counters, &first);
   Impl::ContactSet contacts;
-  const std::vector<Vec3> detected = motion;
+  // Detection is a function of the motion, test by test: a round after the first runs only the
+  // tests with a vertex whose motion changed since the round before (none: its hits stand).
+  std::vector<Vec3> detected = motion;
+  std::vector<std::uint8_t> moved(m.start.size(), 0);
+  const auto redetect = [&] {
+    bool any = false;
+    for (int v = 0; v < m.cloth_vertices; ++v) any |= (moved[std::size_t(v)] = motion[std::size_t(v)] != detected[std::size_t(v)]);
+    if (!any) return;
+    hits = m.settings.incremental_rounds ? m.detect(h, motion, counters, nullptr, &moved, &hits) : m.detect(h, motion, counters);
+    detected = motion;
+  };
   m.repel(first, h, motion, contacts, counters);
   m.keep_out_of_analytic_obstacles(t + h, h, motion);
-  // Detection is a function of the motion: when neither changed it, its hits stand.
-  if (motion != detected) hits = m.detect(h, motion, counters);
+  redetect();
   for (int round = 0; !hits.empty() && round < m.model.scene.collisions.max_impulse_iterations; ++round) {
     ++counters.impulse_iterations;
     for (const auto& [contact, toc] : hits) contacts.add(contact, separation, m.inverse_mass);
     m.impulses(contacts, h, motion);
     m.keep_out_of_analytic_obstacles(t + h, h, motion);
-    hits = m.detect(h, motion, counters);
+    redetect();
   }
   // Impact zones, growing until no collision is left.
   Zones zones(int(m.start.size()));
@@ -588,7 +625,7 @@ CollisionCounters CollisionPipeline::resolve(const std::vector<Vec3>& start, Sca
       for (int k = 1; k < 4; ++k) zones.join(contact.vertex[0], contact.vertex[k]);
     m.apply_zones(zones, h, motion, counters);
     m.keep_out_of_analytic_obstacles(t + h, h, motion);
-    hits = m.detect(h, motion, counters);
+    redetect();
   }
   // The fail-safe: colliding cloth vertices keep their start positions; then all of them.
   if (!hits.empty()) {
@@ -596,7 +633,7 @@ CollisionCounters CollisionPipeline::resolve(const std::vector<Vec3>& start, Sca
     for (const auto& [contact, toc] : hits)
       for (int v : contact.vertex)
         if (v < m.cloth_vertices && m.inverse_mass[v] > 0) motion[v] = Vec3::Zero();
-    hits = m.detect(h, motion, counters);
+    redetect();
     if (!hits.empty())
       for (int v = 0; v < m.cloth_vertices; ++v)
         if (m.inverse_mass[v] > 0) motion[v] = Vec3::Zero();

@@ -303,3 +303,37 @@ TEST(PatchTree, BrokenMeshesAreNeverCulledWhereTheyAreBroken) {
     EXPECT_GT(expect_no_contact_lost(*s, 0.01), 0u);
   }
 }
+
+TEST(PatchTree, MovedVerticesRestrictThePairsToTheirs) {
+  // With a flag per vertex, exactly the pairs with a triangle holding a flagged vertex, and
+  // feature_pairs keeps exactly the tests with a flagged vertex.
+  std::mt19937_64 rng(3);
+  std::normal_distribution<Scalar> wobble(0, 0.6);
+  const Sheet s = grid(16, 16, [&](Scalar u, Scalar v) {
+    const Vec3 p(u + wobble(rng), v + wobble(rng), 2 * std::sin(u * 0.7) + wobble(rng));
+    return std::pair{p, Vec3(p + Vec3(wobble(rng), wobble(rng), wobble(rng)))};
+  });
+  std::vector<std::uint8_t> moved(s.start.size(), 0);
+  for (std::size_t v = 0; v < moved.size(); v += 7) moved[v] = 1;
+  PatchTree tree(s.triangles, s.start);
+  const Pairs all = tree.self_pairs(s.start, s.end, 0.02), some = tree.self_pairs(s.start, s.end, 0.02, 1, nullptr, moved);
+  Pairs expected;
+  const auto flagged = [&](std::int32_t t) {
+    return moved[std::size_t(s.triangles[std::size_t(t)][0])] || moved[std::size_t(s.triangles[std::size_t(t)][1])] ||
+           moved[std::size_t(s.triangles[std::size_t(t)][2])];
+  };
+  for (const auto& p : all)
+    if (flagged(p.first) || flagged(p.second)) expected.push_back(p);
+  ASSERT_GT(expected.size(), 50u);
+  EXPECT_LT(expected.size(), all.size());
+  EXPECT_EQ(some, expected);
+  const Candidates every = feature_pairs(s.triangles, s.triangles, all);
+  const Candidates kept = feature_pairs(s.triangles, s.triangles, all, {}, 1, moved);
+  std::size_t vf = 0, ee = 0;
+  for (const auto& p : every.vertex_face) vf += moved[std::size_t(p.vertex)] || moved[std::size_t(p.face[0])] ||
+                                                moved[std::size_t(p.face[1])] || moved[std::size_t(p.face[2])];
+  for (const auto& p : every.edge_edge) ee += moved[std::size_t(p.edge_a[0])] || moved[std::size_t(p.edge_a[1])] ||
+                                              moved[std::size_t(p.edge_b[0])] || moved[std::size_t(p.edge_b[1])];
+  EXPECT_EQ(kept.vertex_face.size(), vf);
+  EXPECT_EQ(kept.edge_edge.size(), ee);
+}

@@ -94,9 +94,11 @@ using TriangleIndices = std::array<std::int32_t, 3>;
 
 /// pairs index triangles_a (first) and triangles_b (second); for self-collision pass the same
 /// span twice. threads: the pairs are split into chunks done in parallel (TBB); the result is
-/// sorted and the same for any thread count.
+/// sorted and the same for any thread count. With moved (a flag per vertex), only the features
+/// with a moved vertex are kept.
 Candidates feature_pairs(std::span<const TriangleIndices> triangles_a, std::span<const TriangleIndices> triangles_b,
                          std::span<const std::pair<std::int32_t, std::int32_t>> pairs,
-                         std::span<const FeatureVolume> vertex_volumes = {}, int threads = 1);
+                         std::span<const FeatureVolume> vertex_volumes = {}, int threads = 1,
+                         std::span<const std::uint8_t> moved = {});
 
 }  // namespace drape::ccd

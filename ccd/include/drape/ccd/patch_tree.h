@@ -43,10 +43,13 @@ class PatchTree {
   /// The triangle pairs (i < j) whose swept boxes (corners at start and at end, grown by
   /// margin) overlap, leaving out every pair inside a patch proven free of self-contact for the
   /// whole step. Pairs of triangles sharing a vertex are kept (their other features can still
-  /// meet). Sorted; the same for any thread count.
+  /// meet). Sorted; the same for any thread count. With moved (a flag per vertex), only the
+  /// pairs with a triangle holding a moved vertex: a later detection round's, when the others'
+  /// motion is the one an earlier round already tested.
   std::vector<std::pair<std::int32_t, std::int32_t>> self_pairs(std::span<const Vec3> start, std::span<const Vec3> end,
                                                                 Scalar margin, int threads = 1,
-                                                                SelfCullCounters* counters = nullptr);
+                                                                SelfCullCounters* counters = nullptr,
+                                                                std::span<const std::uint8_t> moved = {});
 
   std::size_t node_count() const { return nodes_.size(); }
 

@@ -32,6 +32,10 @@ struct CollisionSettings {
   /// their rest distance as their gap instead of the thickness (docs/collisions.md).
   Scalar rest_fraction = 0.5;
   int threads = 1;  ///< narrow-phase threads (results do not depend on it)
+  /// A detection round after the first runs only the tests with a vertex whose motion changed
+  /// since the round before, keeping that round's other hits; false: every round runs every
+  /// test (the same hits, in the same order; for tests and benchmarks).
+  bool incremental_rounds = true;
 };
 
 /// What the pipeline did in one step; summed into the frame statistics.
