@@ -130,12 +130,21 @@ class ConjugateGradientSolver final : public LinearSolver {
 
 }  // namespace
 
+// CHOLMOD (SuiteSparse 5) runs parts of its supernodal factorisation in OpenMP regions with
+// a fixed num_threads(4) clause, which neither omp_set_num_threads nor OMP_NUM_THREADS can
+// lower: on a machine with fewer cores its threads spun against each other and the rest of the
+// step (the pile's first 12 frames took 18.1 s, 6.2 of them in the kernel; with the regions
+// serial 7.6 s, the same results). No active parallel level makes every region run on the
+// calling thread; set on each thread that calls CHOLMOD, before each call.
+namespace {
+void serial_openmp() {
+  omp_set_num_threads(1);
+  omp_set_max_active_levels(0);
+}
+}  // namespace
+
 struct CholmodFactor::Impl {
-  Impl() {
-    // CHOLMOD parallelises parts of its work with OpenMP; one thread keeps runs bit-for-bit
-    // reproducible and leaves the cores to the collision pipeline.
-    omp_set_num_threads(1);
-  }
+  Impl() { serial_openmp(); }
   bool same_pattern(const SparseMatrix& A) const {
     return analyses > 0 && A.rows() == rows && A.nonZeros() == nonzeros &&
            std::equal(A.outerIndexPtr(), A.outerIndexPtr() + A.outerSize() + 1, outer.begin()) &&
@@ -165,6 +174,7 @@ bool CholmodFactor::factorise(const SparseMatrix& A) {
   Impl& f = *impl_;
   f.empty = A.rows() == 0;
   if (f.empty) return true;  // nothing free (every vertex pinned): CHOLMOD refuses an empty matrix
+  serial_openmp();
   if (!f.same_pattern(A)) {
     const bool supernodal = use_ == Use::Refactorised && A.rows() >= SUPERNODAL_MIN_ROWS;
     f.llt.setMode(supernodal ? Eigen::CholmodSupernodalLLt : Eigen::CholmodSimplicialLLt);
@@ -183,6 +193,7 @@ bool CholmodFactor::solve(const Eigen::Matrix<Scalar, Eigen::Dynamic, 3>& B,
     X.resize(0, 3);
     return true;
   }
+  serial_openmp();
   X = impl_->llt.solve(B);
   return impl_->llt.info() == Eigen::Success && X.allFinite();
 }
@@ -192,6 +203,7 @@ bool CholmodFactor::solve(const VectorX& b, VectorX& x) const {
     x.resize(0);
     return true;
   }
+  serial_openmp();
   x = impl_->llt.solve(b);
   return impl_->llt.info() == Eigen::Success && x.allFinite();
 }
