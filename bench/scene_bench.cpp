@@ -106,7 +106,8 @@ std::array<MethodRun, N> time_methods(const Frame& frame, const std::array<Timed
 
 // The self-collision broad phase of the frame's rounds, both ways, on the identical motions:
 // the btDbvt over every triangle against itself (what every round did before the patch tree)
-// and the patch tree with its culling, each through feature_pairs to the elementary tests.
+// and the patch tree with its culling, each through feature_pairs to the elementary tests (the
+// btDbvt's sorted and made unique, the patch tree's made once by their owners, as a run does).
 struct SelfBroadPhase {
   double dbvt_ms = 0, patch_ms = 0;  // medians over the passes of the frame's rounds
   std::size_t dbvt_tests = 0, patch_tests = 0;
@@ -120,6 +121,7 @@ SelfBroadPhase time_self_broad_phase(const Frame& frame, const Model& model, int
   for (const Triangle& t : model.triangles) triangles.push_back({t[0], t[1], t[2]});
   const Scalar margin = model.scene.collisions.thickness;
   ccd::PatchTree patches(triangles, model.initial_positions);
+  const ccd::FeatureOwners owners = ccd::feature_owners(triangles);
   ccd::BoxTree tree;  // built untimed on the first round; each timed round updates it in place, as a run does
   if (!frame.batches.empty()) {
     std::vector<ccd::Aabb> boxes(triangles.size());
@@ -149,15 +151,17 @@ SelfBroadPhase time_self_broad_phase(const Frame& frame, const Model& model, int
       dbvt += since(begin);
       begin = std::chrono::steady_clock::now();
       const auto patch_pairs = patches.self_pairs(b.start, b.end, margin);
-      const ccd::Candidates kept =
-          patch_pairs.empty() ? ccd::Candidates{}
-                              : ccd::feature_pairs(triangles, triangles, patch_pairs, ccd::vertex_volumes(b.start, b.end, margin));
+      ccd::Candidates kept = patch_pairs.empty() ? ccd::Candidates{}
+                                                 : ccd::feature_pairs(triangles, triangles, patch_pairs, owners, owners,
+                                                                      ccd::vertex_volumes(b.start, b.end, margin));
       patch += since(begin);
       if (p > 0) continue;
       out.dbvt_pairs += long(dbvt_pairs.size()), out.patch_pairs += long(patch_pairs.size());
       out.dbvt_tests += all.vertex_face.size() + all.edge_edge.size();
       out.patch_tests += kept.vertex_face.size() + kept.edge_edge.size();
-      // Every contact the btDbvt's tests give must be among the patch tree's (both sorted).
+      // Every contact the btDbvt's tests give must be among the patch tree's (sorted here).
+      std::sort(kept.vertex_face.begin(), kept.vertex_face.end(), vf_less);
+      std::sort(kept.edge_edge.begin(), kept.edge_edge.end(), ee_less);
       const ccd::BatchOutput hits = ccd::run_batch({b.start, b.end, all.vertex_face, all.edge_edge}, ccd::Options{}, 1);
       for (const auto& h : hits.vertex_face)
         out.lost_hits += !std::binary_search(kept.vertex_face.begin(), kept.vertex_face.end(), all.vertex_face[h.index], vf_less);

@@ -9,6 +9,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <tuple>
 
 namespace drape::ccd {
 
@@ -115,10 +116,46 @@ std::vector<std::pair<std::int32_t, std::int32_t>> BoxTree::pairs_with(const Box
   return std::move(collector.pairs);
 }
 
-Candidates feature_pairs(std::span<const TriangleIndices> triangles_a, std::span<const TriangleIndices> triangles_b,
-                         std::span<const std::pair<std::int32_t, std::int32_t>> pairs,
-                         std::span<const FeatureVolume> vertex_volumes, int threads, std::span<const std::uint8_t> moved) {
+FeatureOwners feature_owners(std::span<const TriangleIndices> triangles) {
+  FeatureOwners owners;
+  owners.bits.assign(triangles.size(), 0);
+  std::int32_t highest = -1;
+  for (const TriangleIndices& t : triangles) highest = std::max({highest, t[0], t[1], t[2]});
+  std::vector<std::int32_t> vertex_owner(std::size_t(highest + 1), -1);
+  struct Edge {
+    std::int32_t low, high, triangle, side;
+  };
+  std::vector<Edge> edges;
+  edges.reserve(triangles.size() * 3);
+  for (std::size_t t = 0; t < triangles.size(); ++t)
+    for (int k = 0; k < 3; ++k) {
+      const std::int32_t v = triangles[t][k], w = triangles[t][(k + 1) % 3];
+      if (vertex_owner[std::size_t(v)] < 0) {
+        vertex_owner[std::size_t(v)] = std::int32_t(t);
+        owners.bits[t] |= std::uint8_t(1u << k);
+      }
+      edges.push_back({std::min(v, w), std::max(v, w), std::int32_t(t), k});
+    }
+  std::sort(edges.begin(), edges.end(), [](const Edge& a, const Edge& b) {
+    return std::tie(a.low, a.high, a.triangle, a.side) < std::tie(b.low, b.high, b.triangle, b.side);
+  });
+  for (std::size_t i = 0; i < edges.size(); ++i)
+    if (i == 0 || edges[i].low != edges[i - 1].low || edges[i].high != edges[i - 1].high)
+      owners.bits[std::size_t(edges[i].triangle)] |= std::uint8_t(1u << (3 + edges[i].side));
+  return owners;
+}
+
+namespace {
+
+Candidates features_of(std::span<const TriangleIndices> triangles_a, std::span<const TriangleIndices> triangles_b,
+                       std::span<const std::pair<std::int32_t, std::int32_t>> pairs, const FeatureOwners* owners_a,
+                       const FeatureOwners* owners_b, std::span<const FeatureVolume> vertex_volumes, int threads,
+                       std::span<const std::uint8_t> moved) {
   Candidates out;
+  const bool owned = owners_a && owners_b;
+  const auto answers = [&](const FeatureOwners* owners, std::int32_t triangle, int bit) {
+    return !owned || ((owners->bits[std::size_t(triangle)] >> bit) & 1u);
+  };
   const bool cull = !vertex_volumes.empty();
   const auto any_moved = [&](std::int32_t a, std::int32_t b, std::int32_t c, std::int32_t d) {
     return moved.empty() || moved[std::size_t(a)] || moved[std::size_t(b)] || moved[std::size_t(c)] || moved[std::size_t(d)];
@@ -162,10 +199,14 @@ Candidates feature_pairs(std::span<const TriangleIndices> triangles_a, std::span
   const auto collect = [&](std::size_t begin, std::size_t end, std::vector<Key>& vf, std::vector<Key>& ee) {
     vf.reserve((end - begin) * 6);
     ee.reserve((end - begin) * 9);
-    const auto add_vertex_face = [&](const TriangleIndices& from, const TriangleIndices& face, const FeatureVolume* face_volume) {
-      for (std::int32_t v : from)
-        if (!shares(v, face) && any_moved(v, face[0], face[1], face[2]) && (!cull || overlap(vertex_volumes[v], *face_volume)))
+    const auto add_vertex_face = [&](const TriangleIndices& from, const FeatureOwners* from_owners, std::int32_t from_index,
+                                     const TriangleIndices& face, const FeatureVolume* face_volume) {
+      for (int k = 0; k < 3; ++k) {
+        const std::int32_t v = from[k];
+        if (answers(from_owners, from_index, k) && !shares(v, face) && any_moved(v, face[0], face[1], face[2]) &&
+            (!cull || overlap(vertex_volumes[v], *face_volume)))
           vf.push_back({v, face[0], face[1], face[2]});
+      }
     };
     for (std::size_t p = begin; p < end; ++p) {
       const auto& [ia, ib] = pairs[p];
@@ -173,12 +214,14 @@ Candidates feature_pairs(std::span<const TriangleIndices> triangles_a, std::span
       const TriangleIndices& b = triangles_b[ib];
       const TriangleVolumes* va = cull ? &volumes_a[ia] : nullptr;
       const TriangleVolumes* vb = cull ? &of_b[ib] : nullptr;
-      add_vertex_face(a, b, cull ? &vb->face : nullptr);
-      add_vertex_face(b, a, cull ? &va->face : nullptr);
+      add_vertex_face(a, owners_a, ia, b, cull ? &vb->face : nullptr);
+      add_vertex_face(b, owners_b, ib, a, cull ? &va->face : nullptr);
       for (int i = 0; i < 3; ++i) {
+        if (!answers(owners_a, ia, 3 + i)) continue;
         std::array<std::int32_t, 2> e{a[i], a[(i + 1) % 3]};
         if (e[0] > e[1]) std::swap(e[0], e[1]);
         for (int j = 0; j < 3; ++j) {
+          if (!answers(owners_b, ib, 3 + j)) continue;
           std::array<std::int32_t, 2> f{b[j], b[(j + 1) % 3]};
           if (f[0] > f[1]) std::swap(f[0], f[1]);
           if (e[0] == f[0] || e[0] == f[1] || e[1] == f[0] || e[1] == f[1] || !any_moved(e[0], e[1], f[0], f[1])) continue;
@@ -209,23 +252,40 @@ Candidates feature_pairs(std::span<const TriangleIndices> triangles_a, std::span
       ee.insert(ee.end(), chunk_ee[c].begin(), chunk_ee[c].end());
     }
   }
-  if (threads > 1) {
-    tbb::task_arena arena(threads);
-    arena.execute([&] {
-      tbb::parallel_sort(vf.begin(), vf.end());
-      tbb::parallel_sort(ee.begin(), ee.end());
-    });
-  } else {
-    std::sort(vf.begin(), vf.end());
-    std::sort(ee.begin(), ee.end());
+  if (!owned) {  // every test as often as its triangle pairs: sorted, and each kept once
+    if (threads > 1) {
+      tbb::task_arena arena(threads);
+      arena.execute([&] {
+        tbb::parallel_sort(vf.begin(), vf.end());
+        tbb::parallel_sort(ee.begin(), ee.end());
+      });
+    } else {
+      std::sort(vf.begin(), vf.end());
+      std::sort(ee.begin(), ee.end());
+    }
+    vf.erase(std::unique(vf.begin(), vf.end()), vf.end());
+    ee.erase(std::unique(ee.begin(), ee.end()), ee.end());
   }
-  vf.erase(std::unique(vf.begin(), vf.end()), vf.end());
-  ee.erase(std::unique(ee.begin(), ee.end()), ee.end());
   out.vertex_face.reserve(vf.size());
   for (const auto& k : vf) out.vertex_face.push_back({k[0], {k[1], k[2], k[3]}});
   out.edge_edge.reserve(ee.size());
   for (const auto& k : ee) out.edge_edge.push_back({{k[0], k[1]}, {k[2], k[3]}});
   return out;
+}
+
+}  // namespace
+
+Candidates feature_pairs(std::span<const TriangleIndices> triangles_a, std::span<const TriangleIndices> triangles_b,
+                         std::span<const std::pair<std::int32_t, std::int32_t>> pairs,
+                         std::span<const FeatureVolume> vertex_volumes, int threads, std::span<const std::uint8_t> moved) {
+  return features_of(triangles_a, triangles_b, pairs, nullptr, nullptr, vertex_volumes, threads, moved);
+}
+
+Candidates feature_pairs(std::span<const TriangleIndices> triangles_a, std::span<const TriangleIndices> triangles_b,
+                         std::span<const std::pair<std::int32_t, std::int32_t>> pairs, const FeatureOwners& owners_a,
+                         const FeatureOwners& owners_b, std::span<const FeatureVolume> vertex_volumes, int threads,
+                         std::span<const std::uint8_t> moved) {
+  return features_of(triangles_a, triangles_b, pairs, &owners_a, &owners_b, vertex_volumes, threads, moved);
 }
 
 }  // namespace drape::ccd

@@ -106,10 +106,12 @@ struct CollisionPipeline::Impl {
     int first_vertex;
     std::vector<ccd::TriangleIndices> triangles;  // indices into the combined vertex array
     ccd::BoxTree tree;
+    ccd::FeatureOwners owners;
   };
   std::vector<MeshObstacle> obstacles;
   ccd::BoxTree cloth_tree;     // the cloth's triangles, against the mesh obstacles (and itself without self_culling)
   ccd::PatchTree patch_tree;   // self-collision with self_culling
+  ccd::FeatureOwners cloth_owners;  // which triangle makes the tests of each cloth vertex and edge
   std::vector<Scalar> inverse_mass;  // combined array; 0 for kinematic vertices
   std::vector<int> cloth_of_vertex;  // cloth vertices only: the index of their cloth
   std::vector<Vec3> start, end;      // combined positions at t and t + h
@@ -125,8 +127,9 @@ struct CollisionPipeline::Impl {
     if (m.scene.collisions.obstacles) {
       for (const Obstacle& o : m.obstacles) {
         if (o.spec.kind != ObstacleSpec::Kind::Mesh) continue;
-        MeshObstacle mo{&o, offset, {}, {}};
+        MeshObstacle mo{&o, offset, {}, {}, {}};
         for (const Triangle& t : o.mesh.triangles) mo.triangles.push_back({t[0] + offset, t[1] + offset, t[2] + offset});
+        mo.owners = ccd::feature_owners(mo.triangles);
         offset += int(o.mesh.vertices.size());
         obstacles.push_back(std::move(mo));
       }
@@ -140,6 +143,7 @@ struct CollisionPipeline::Impl {
     start.resize(offset);
     end.resize(offset);
     if (m.scene.collisions.self && m.scene.collisions.self_culling) patch_tree = ccd::PatchTree(cloth_triangles, m.initial_positions);
+    cloth_owners = ccd::feature_owners(cloth_triangles);
     options.method = m.scene.collisions.method;
     options.thickness = 0;  // exact contact; the thickness is kept by proximity repulsion
   }
@@ -160,7 +164,8 @@ struct CollisionPipeline::Impl {
       cloth_tree.update(boxes);
     }
     bool features_ready = false;
-    const auto append = [&](std::span<const ccd::TriangleIndices> other, const std::vector<std::pair<std::int32_t, std::int32_t>>& pairs) {
+    const auto append = [&](std::span<const ccd::TriangleIndices> other, const ccd::FeatureOwners& other_owners,
+                            const std::vector<std::pair<std::int32_t, std::int32_t>>& pairs) {
       counters.bvh_pairs += long(pairs.size());
       if (pairs.empty()) return;
       if (!features_ready) {
@@ -168,22 +173,22 @@ struct CollisionPipeline::Impl {
         else features.clear();
         features_ready = true;
       }
-      ccd::Candidates c = ccd::feature_pairs(cloth_triangles, other, pairs, features, settings.threads, moved);
+      ccd::Candidates c = ccd::feature_pairs(cloth_triangles, other, pairs, cloth_owners, other_owners, features, settings.threads, moved);
       all.vertex_face.insert(all.vertex_face.end(), c.vertex_face.begin(), c.vertex_face.end());
       all.edge_edge.insert(all.edge_edge.end(), c.edge_edge.begin(), c.edge_edge.end());
     };
     if (culling) {
       ccd::SelfCullCounters culled;
-      append(cloth_triangles, patch_tree.self_pairs(start, end, margin, settings.threads, &culled, moved));
+      append(cloth_triangles, cloth_owners, patch_tree.self_pairs(start, end, margin, settings.threads, &culled, moved));
       counters.culled_triangles += culled.triangles_culled;
     } else if (self_pairs) {
-      append(cloth_triangles, cloth_tree.self_pairs());
+      append(cloth_triangles, cloth_owners, cloth_tree.self_pairs());
     }
     for (MeshObstacle& mo : obstacles) {
       std::vector<ccd::Aabb> obstacle_boxes(mo.triangles.size());
       for (std::size_t i = 0; i < mo.triangles.size(); ++i) obstacle_boxes[i] = ccd::swept_box(mo.triangles[i], start, end, margin);
       mo.tree.update(obstacle_boxes);
-      append(mo.triangles, cloth_tree.pairs_with(mo.tree));
+      append(mo.triangles, mo.owners, cloth_tree.pairs_with(mo.tree));
     }
     counters.broad_ms += ms_since(begin);
     return all;
@@ -320,6 +325,20 @@ struct CollisionPipeline::Impl {
     return c;
   }
 
+  // The order of a whole round's contacts, which the response keeps (its impulses are solved in
+  // that order): vertex-face before edge-edge, each kind the cloth's own and then each mesh
+  // obstacle's, each of those by its vertices.
+  bool listed_before(const Contact& a, const Contact& b) const {
+    return std::make_tuple(!a.vertex_face, source(a.vertex), a.vertex) < std::make_tuple(!b.vertex_face, source(b.vertex), b.vertex);
+  }
+  // Which list a test comes from: 0 the cloth's own, k the k-th mesh obstacle's.
+  int source(const std::array<int, 4>& vertices) const {
+    const int highest = *std::max_element(vertices.begin(), vertices.end());
+    int block = 0;
+    for (const MeshObstacle& mo : obstacles) block += highest >= mo.first_vertex;
+    return block;
+  }
+
   // The time of contact the response uses: vincent's for any method that agrees on the hit,
   // so that the method chosen changes the cost of detection, never the simulation (cubic and
   // dnf find the same roots, to rounding; those last bits would otherwise grow into different
@@ -364,23 +383,12 @@ struct CollisionPipeline::Impl {
       const Scalar toc = canonical_toc(ccd::QueryKind::EdgeEdge, ccd::gather(input, p), hit.result.toc);
       hits.emplace_back(contact(false, {p.edge_a[0], p.edge_a[1], p.edge_b[0], p.edge_b[1]}, toc), toc);
     }
-    if (moved && before) {
+    if (moved && before)
       for (const auto& hit : *before)
         if (std::none_of(hit.first.vertex.begin(), hit.first.vertex.end(), [&](int v) { return (*moved)[std::size_t(v)] != 0; }))
           hits.push_back(hit);
-      // A whole round lists its vertex-face hits before its edge-edge ones, each kind the
-      // cloth's own tests and then each mesh obstacle's, each of those in sorted order.
-      const auto source = [&](const Contact& contact) {
-        const int highest = *std::max_element(contact.vertex.begin(), contact.vertex.end());
-        int block = 0;
-        for (const MeshObstacle& mo : obstacles) block += highest >= mo.first_vertex;
-        return block;
-      };
-      std::sort(hits.begin(), hits.end(), [&](const auto& a, const auto& b) {
-        return std::make_tuple(!a.first.vertex_face, source(a.first), a.first.vertex) <
-               std::make_tuple(!b.first.vertex_face, source(b.first), b.first.vertex);
-      });
-    }
+    // The tests come unsorted (feature_pairs' owners): the hits in a whole round's order.
+    std::sort(hits.begin(), hits.end(), [&](const auto& a, const auto& b) { return listed_before(a.first, b.first); });
     counters.ccd_hits += long(hits.size());
     counters.ccd_ms += ms_since(begin);
     if (keep) *keep = std::move(c);
@@ -427,13 +435,15 @@ struct CollisionPipeline::Impl {
   // none.
   void repel(const ccd::Candidates& c, Scalar h, std::vector<Vec3>& motion, ContactSet& set, CollisionCounters& counters) {
     const Scalar thickness = model.scene.collisions.thickness;
+    std::vector<Contact> near;
     const auto push = [&](bool vertex_face, Contact contact, const Vec3& offset) {
       const Scalar distance = offset.norm();
       if (!(distance < thickness) || !(distance > 0)) return;
       const Scalar gap = kept_gap(vertex_face, contact.vertex, counters);
       if (!(distance < gap)) return;
+      contact.vertex_face = vertex_face;
       contact.normal = offset / distance;
-      set.add(contact, 0, inverse_mass);
+      near.push_back(contact);
     };
     for (const auto& p : c.vertex_face) {
       const auto closest = ccd::closest_point_triangle<Scalar>(start[p.vertex], start[p.face[0]], start[p.face[1]], start[p.face[2]]);
@@ -449,6 +459,9 @@ struct CollisionPipeline::Impl {
       contact.weight = {1 - closest.s, closest.s, -(1 - closest.u), -closest.u};
       push(false, contact, closest.point_a - closest.point_b);
     }
+    // The tests come unsorted (feature_pairs' owners): the contacts in a whole round's order.
+    std::sort(near.begin(), near.end(), [&](const Contact& a, const Contact& b) { return listed_before(a, b); });
+    for (const Contact& contact : near) set.add(contact, 0, inverse_mass);
     counters.proximity_impulses += impulses(set, h, motion);
   }
 
@@ -512,7 +525,19 @@ std::vector<SolveContact> CollisionPipeline::mesh_contacts(const std::vector<Vec
   for (int v = 0; v < m.cloth_vertices; ++v) m.start[v] = m.end[v] = start[v];
   m.pose_obstacles(t, h);
   CollisionCounters unused;
-  const ccd::Candidates c = m.candidates(reach, unused, false);
+  ccd::Candidates c = m.candidates(reach, unused, false);
+  // In a whole round's order (feature_pairs' owners leave the tests unsorted): which of several
+  // nearly equal contacts is kept depends on it.
+  const auto vf_key = [&](const ccd::VertexFacePair& p) {
+    const std::array<int, 4> v{p.vertex, p.face[0], p.face[1], p.face[2]};
+    return std::make_pair(m.source(v), v);
+  };
+  const auto ee_key = [&](const ccd::EdgeEdgePair& p) {
+    const std::array<int, 4> v{p.edge_a[0], p.edge_a[1], p.edge_b[0], p.edge_b[1]};
+    return std::make_pair(m.source(v), v);
+  };
+  std::sort(c.vertex_face.begin(), c.vertex_face.end(), [&](const auto& a, const auto& b) { return vf_key(a) < vf_key(b); });
+  std::sort(c.edge_edge.begin(), c.edge_edge.end(), [&](const auto& a, const auto& b) { return ee_key(a) < ee_key(b); });
   // Per cloth feature (its vertices), its nearest obstacle points in distinct directions.
   std::map<std::array<int, 3>, std::vector<std::pair<Scalar, SolveContact>>> near;
   const auto free = [&](int v) { return v < m.cloth_vertices && m.inverse_mass[std::size_t(v)] > 0; };

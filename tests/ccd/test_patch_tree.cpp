@@ -337,3 +337,56 @@ TEST(PatchTree, MovedVerticesRestrictThePairsToTheirs) {
   EXPECT_EQ(kept.vertex_face.size(), vf);
   EXPECT_EQ(kept.edge_edge.size(), ee);
 }
+
+TEST(PatchTree, OwnedFeaturesAreTheSameTestsOnceEach) {
+  // feature_pairs with each vertex and edge answered for by one triangle: from every
+  // overlapping pair, exactly the tests of the sorting path, each once; from the patch tree's
+  // pairs, a subset that keeps every contact.
+  for (int seed = 1; seed <= 3; ++seed) {
+    std::mt19937_64 rng(seed);
+    std::normal_distribution<Scalar> wobble(0, 0.5), move(0, 0.4);
+    const Sheet s = grid(14, 12, [&](Scalar u, Scalar v) {
+      const Vec3 p(u + wobble(rng), v + wobble(rng), 2 * std::sin(u * 0.8) * std::cos(v * 0.6) + wobble(rng));
+      return std::pair{p, Vec3(p + Vec3(move(rng), move(rng), move(rng)))};
+    });
+    const FeatureOwners owners = feature_owners(s.triangles);
+    const auto volumes = vertex_volumes(s.start, s.end, 0.02);
+    const Pairs everything = all_pairs(s, 0.02);
+    const Candidates sorted = feature_pairs(s.triangles, s.triangles, everything, volumes);
+    for (int threads : {1, 2}) {
+      Candidates once = feature_pairs(s.triangles, s.triangles, everything, owners, owners, volumes, threads);
+      const std::size_t vf = once.vertex_face.size(), ee = once.edge_edge.size();
+      std::sort(once.vertex_face.begin(), once.vertex_face.end(), [](const auto& a, const auto& b) {
+        return std::tie(a.vertex, a.face) < std::tie(b.vertex, b.face);
+      });
+      std::sort(once.edge_edge.begin(), once.edge_edge.end(), [](const auto& a, const auto& b) {
+        return std::tie(a.edge_a, a.edge_b) < std::tie(b.edge_a, b.edge_b);
+      });
+      ASSERT_EQ(vf, sorted.vertex_face.size()) << "seed " << seed;  // no test twice, none missing
+      ASSERT_EQ(ee, sorted.edge_edge.size()) << "seed " << seed;
+      for (std::size_t i = 0; i < vf; ++i)
+        EXPECT_TRUE(once.vertex_face[i].vertex == sorted.vertex_face[i].vertex && once.vertex_face[i].face == sorted.vertex_face[i].face);
+      for (std::size_t i = 0; i < ee; ++i)
+        EXPECT_TRUE(once.edge_edge[i].edge_a == sorted.edge_edge[i].edge_a && once.edge_edge[i].edge_b == sorted.edge_edge[i].edge_b);
+    }
+    // From the patch tree's pairs: every contact of the sorting path's tests on all pairs.
+    const Pairs culled = culled_pairs(s, 0.02).pairs;
+    const Candidates owned = feature_pairs(s.triangles, s.triangles, culled, owners, owners, volumes);
+    const auto found = [&](const Candidates& c) {
+      const BatchOutput out = run_batch({s.start, s.end, c.vertex_face, c.edge_edge}, Options{});
+      std::set<std::array<std::int32_t, 5>> keys;
+      for (const BatchHit& h : out.vertex_face) {
+        const auto& p = c.vertex_face[h.index];
+        keys.insert({0, p.vertex, p.face[0], p.face[1], p.face[2]});
+      }
+      for (const BatchHit& h : out.edge_edge) {
+        const auto& p = c.edge_edge[h.index];
+        keys.insert({1, p.edge_a[0], p.edge_a[1], p.edge_b[0], p.edge_b[1]});
+      }
+      return keys;
+    };
+    const auto expected = found(sorted);
+    EXPECT_GT(expected.size(), 10u);
+    EXPECT_EQ(found(owned), expected) << "seed " << seed;
+  }
+}

@@ -92,6 +92,14 @@ struct Candidates {
 
 using TriangleIndices = std::array<std::int32_t, 3>;
 
+/// Which triangle answers for each corner and edge of a mesh: the first triangle holding it
+/// (representative triangles, Curtis, Tamstorf and Manocha 2008). Per triangle, bit k is set
+/// when it answers for corner k and bit 3 + i when it answers for edge i (corner i to i + 1).
+struct FeatureOwners {
+  std::vector<std::uint8_t> bits;
+};
+FeatureOwners feature_owners(std::span<const TriangleIndices> triangles);
+
 /// pairs index triangles_a (first) and triangles_b (second); for self-collision pass the same
 /// span twice. threads: the pairs are split into chunks done in parallel (TBB); the result is
 /// sorted and the same for any thread count. With moved (a flag per vertex), only the features
@@ -99,6 +107,17 @@ using TriangleIndices = std::array<std::int32_t, 3>;
 Candidates feature_pairs(std::span<const TriangleIndices> triangles_a, std::span<const TriangleIndices> triangles_b,
                          std::span<const std::pair<std::int32_t, std::int32_t>> pairs,
                          std::span<const FeatureVolume> vertex_volumes = {}, int threads = 1,
+                         std::span<const std::uint8_t> moved = {});
+
+/// The same tests, each made once by the pair of the triangles answering for its two features
+/// (owners_a of triangles_a, owners_b of triangles_b), in the order of pairs and not sorted: no
+/// sort and no removal of repeats. pairs must hold every pair of triangles whose boxes (grown
+/// by the volumes' margin) overlap, adjacent ones too, but for pairs inside a region whose
+/// features cannot touch (ccd::PatchTree's culled patches). The same tests as the overload
+/// above, except those inside such regions that reached it through a pair outside them.
+Candidates feature_pairs(std::span<const TriangleIndices> triangles_a, std::span<const TriangleIndices> triangles_b,
+                         std::span<const std::pair<std::int32_t, std::int32_t>> pairs, const FeatureOwners& owners_a,
+                         const FeatureOwners& owners_b, std::span<const FeatureVolume> vertex_volumes = {}, int threads = 1,
                          std::span<const std::uint8_t> moved = {});
 
 }  // namespace drape::ccd
