@@ -9,7 +9,6 @@
 #include <cmath>
 #include <numeric>
 #include <tuple>
-#include <unordered_map>
 
 namespace drape::ccd {
 
@@ -80,6 +79,11 @@ PatchTree::PatchTree(std::span<const TriangleIndices> triangles, std::span<const
   scratch.neighbours.assign(std::size_t(n), {-1, -1, -1});
   scratch.stamp.assign(std::size_t(n), -1);
   scratch.position.assign(std::size_t(n), 0);
+  std::int32_t highest = 0;
+  for (const TriangleIndices& t : triangles_) highest = std::max({highest, t[0], t[1], t[2]});
+  scratch.vertex_seen.assign(std::size_t(highest) + 1, -1);
+  scratch.boundary_stamp.assign(std::size_t(highest) + 1, -1);
+  scratch.boundary_next.assign(std::size_t(highest) + 1, 0);
   auto& neighbours = scratch.neighbours;
   for (std::size_t i = 0; i < half.size();) {
     std::size_t j = i;
@@ -125,32 +129,39 @@ std::int32_t PatchTree::build(std::vector<std::int32_t>& set, BuildScratch& scra
   // A disk: connected, its boundary half-edges one cycle through distinct vertices, and Euler
   // characteristic V - E + F = 1 (with one boundary cycle, only a disk has it).
   if (components == 1) {
-    std::unordered_map<std::int32_t, std::int32_t> next;  // boundary vertex -> the next one
+    // Per vertex, stamped with this node: seen, and the boundary's next vertex after it.
+    auto& seen = scratch.vertex_seen;
+    auto& next = scratch.boundary_next;
+    auto& next_stamp = scratch.boundary_stamp;
     bool simple = true;
     std::size_t boundary = 0;
-    std::vector<std::int32_t> vertices;
+    std::int64_t v = 0;
+    std::int32_t first = -1;  // the boundary's least vertex
     for (std::int32_t t : set) {
       const TriangleIndices& tri = triangles_[std::size_t(t)];
       for (int i = 0; i < 3; ++i) {
-        vertices.push_back(tri[i]);
+        const auto a = std::size_t(tri[i]);
+        if (seen[a] != index) seen[a] = index, ++v;
         if (in_set(neighbours[std::size_t(t)][i])) continue;
         ++boundary;
-        simple &= next.emplace(tri[i], tri[(i + 1) % 3]).second;
+        simple &= next_stamp[a] != index;  // one boundary edge out of each vertex
+        next_stamp[a] = index;
+        next[a] = tri[(i + 1) % 3];
+        first = first < 0 ? tri[i] : std::min(first, tri[i]);
       }
     }
-    std::sort(vertices.begin(), vertices.end());
-    const auto v = std::int64_t(std::unique(vertices.begin(), vertices.end()) - vertices.begin());
     const auto f = std::int64_t(set.size());
     const std::int64_t e = (3 * f + std::int64_t(boundary)) / 2;
     if (simple && boundary >= 3 && v - e + f == 1) {
       // Started at its least vertex, so that the order of its sums is the same everywhere.
-      std::int32_t first = next.begin()->first;
-      for (const auto& [v, after] : next) first = std::min(first, v);
       std::vector<std::int32_t> cycle{first};
-      for (auto at = next.find(cycle.back()); at != next.end() && at->second != cycle.front() && cycle.size() <= boundary;
-           at = next.find(cycle.back()))
-        cycle.push_back(at->second);
-      if (cycle.size() == boundary && next.at(cycle.back()) == cycle.front()) {
+      while (cycle.size() <= boundary) {
+        const auto at = std::size_t(cycle.back());
+        if (next_stamp[at] != index || next[at] == first) break;
+        cycle.push_back(next[at]);
+      }
+      const auto last = std::size_t(cycle.back());
+      if (cycle.size() == boundary && next_stamp[last] == index && next[last] == first) {
         nodes_[std::size_t(index)].contour_first = std::int32_t(contours_.size());
         nodes_[std::size_t(index)].contour_count = std::int32_t(cycle.size());
         contours_.insert(contours_.end(), cycle.begin(), cycle.end());

@@ -63,6 +63,8 @@ class PatchTree {
   struct BuildScratch {
     std::vector<std::array<std::int32_t, 3>> neighbours;  // across each triangle's edges; -1: none
     std::vector<std::int32_t> stamp, position;          // the node a triangle was last in, and where
+    std::vector<std::int32_t> vertex_seen;              // per vertex: the last node that counted it
+    std::vector<std::int32_t> boundary_stamp, boundary_next;  // per vertex: the last node whose boundary leaves it, and to where
   };
 
   std::int32_t build(std::vector<std::int32_t>& set, BuildScratch& scratch, std::span<const Vec3> reference);
