@@ -107,7 +107,8 @@ std::array<MethodRun, N> time_methods(const Frame& frame, const std::array<Timed
 // The self-collision broad phase of the frame's rounds, both ways, on the identical motions:
 // the btDbvt over every triangle against itself (what every round did before the patch tree)
 // and the patch tree with its culling, each through feature_pairs to the elementary tests (the
-// btDbvt's sorted and made unique, the patch tree's made once by their owners, as a run does).
+// btDbvt's sorted and made unique, the patch tree's made once by their owners). Every round
+// whole: a run's later rounds test only what moved since the round before.
 struct SelfBroadPhase {
   double dbvt_ms = 0, patch_ms = 0;  // medians over the passes of the frame's rounds
   std::size_t dbvt_tests = 0, patch_tests = 0;

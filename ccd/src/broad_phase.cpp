@@ -142,6 +142,17 @@ FeatureOwners feature_owners(std::span<const TriangleIndices> triangles) {
   for (std::size_t i = 0; i < edges.size(); ++i)
     if (i == 0 || edges[i].low != edges[i - 1].low || edges[i].high != edges[i - 1].high)
       owners.bits[std::size_t(edges[i].triangle)] |= std::uint8_t(1u << (3 + edges[i].side));
+  // A face answers for itself unless an earlier triangle has the same corners (a duplicated
+  // face, as some exported meshes hold): its vertex-face tests are the first one's.
+  std::vector<std::pair<TriangleIndices, std::int32_t>> faces(triangles.size());
+  for (std::size_t t = 0; t < triangles.size(); ++t) {
+    TriangleIndices corners = triangles[t];
+    std::sort(corners.begin(), corners.end());
+    faces[t] = {corners, std::int32_t(t)};
+  }
+  std::sort(faces.begin(), faces.end());
+  for (std::size_t i = 0; i < faces.size(); ++i)
+    if (i == 0 || faces[i].first != faces[i - 1].first) owners.bits[std::size_t(faces[i].second)] |= std::uint8_t(1u << 6);
   return owners;
 }
 
@@ -200,7 +211,9 @@ Candidates features_of(std::span<const TriangleIndices> triangles_a, std::span<c
     vf.reserve((end - begin) * 6);
     ee.reserve((end - begin) * 9);
     const auto add_vertex_face = [&](const TriangleIndices& from, const FeatureOwners* from_owners, std::int32_t from_index,
-                                     const TriangleIndices& face, const FeatureVolume* face_volume) {
+                                     const TriangleIndices& face, const FeatureOwners* face_owners, std::int32_t face_index,
+                                     const FeatureVolume* face_volume) {
+      if (!answers(face_owners, face_index, 6)) return;
       for (int k = 0; k < 3; ++k) {
         const std::int32_t v = from[k];
         if (answers(from_owners, from_index, k) && !shares(v, face) && any_moved(v, face[0], face[1], face[2]) &&
@@ -214,8 +227,8 @@ Candidates features_of(std::span<const TriangleIndices> triangles_a, std::span<c
       const TriangleIndices& b = triangles_b[ib];
       const TriangleVolumes* va = cull ? &volumes_a[ia] : nullptr;
       const TriangleVolumes* vb = cull ? &of_b[ib] : nullptr;
-      add_vertex_face(a, owners_a, ia, b, cull ? &vb->face : nullptr);
-      add_vertex_face(b, owners_b, ib, a, cull ? &va->face : nullptr);
+      add_vertex_face(a, owners_a, ia, b, owners_b, ib, cull ? &vb->face : nullptr);
+      add_vertex_face(b, owners_b, ib, a, owners_a, ia, cull ? &va->face : nullptr);
       for (int i = 0; i < 3; ++i) {
         if (!answers(owners_a, ia, 3 + i)) continue;
         std::array<std::int32_t, 2> e{a[i], a[(i + 1) % 3]};

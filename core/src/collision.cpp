@@ -173,7 +173,12 @@ struct CollisionPipeline::Impl {
         else features.clear();
         features_ready = true;
       }
-      ccd::Candidates c = ccd::feature_pairs(cloth_triangles, other, pairs, cloth_owners, other_owners, features, settings.threads, moved);
+      // Each test once by its features' triangles; without feature volumes (the paper's count,
+      // every test of every overlapping pair), every pair's tests, sorted and made unique.
+      ccd::Candidates c =
+          features.empty() ? ccd::feature_pairs(cloth_triangles, other, pairs, features, settings.threads, moved)
+                           : ccd::feature_pairs(cloth_triangles, other, pairs, cloth_owners, other_owners, features,
+                                                settings.threads, moved);
       all.vertex_face.insert(all.vertex_face.end(), c.vertex_face.begin(), c.vertex_face.end());
       all.edge_edge.insert(all.edge_edge.end(), c.edge_edge.begin(), c.edge_edge.end());
     };
@@ -225,12 +230,13 @@ struct CollisionPipeline::Impl {
   struct ContactSet {
     std::vector<Contact> contacts;
     std::vector<Scalar> target, pushed, rubbed, denominator;
-    std::map<std::array<int, 4>, std::size_t> index;
+    std::map<std::pair<bool, std::array<int, 4>>, std::size_t> index;  // by kind and vertices
     // Adds a contact, or renews one found before (its impulse so far kept, the larger target).
     void add(const Contact& c, Scalar target_c, const std::vector<Scalar>& inverse_mass) {
       Scalar d = 0;
       for (int k = 0; k < 4; ++k) d += c.weight[k] * c.weight[k] * inverse_mass[c.vertex[k]];
-      const auto [place, added] = index.emplace(c.vertex, contacts.size());
+      // (a vertex-face contact 1; 2 3 4 and an edge-edge one 1 2 - 3 4 are two contacts)
+      const auto [place, added] = index.emplace(std::make_pair(c.vertex_face, c.vertex), contacts.size());
       if (!added) {
         const std::size_t i = place->second;
         // An impulse along a normal that has turned can no longer be taken back along the new one.

@@ -390,3 +390,58 @@ TEST(PatchTree, OwnedFeaturesAreTheSameTestsOnceEach) {
     EXPECT_EQ(found(owned), expected) << "seed " << seed;
   }
 }
+
+TEST(PatchTree, OwnedFeaturesAcrossTwoMeshesWithDuplicatedFaces) {
+  // A cloth against a second mesh (its indices offset into one vertex array) that holds some
+  // faces twice: the owned path makes exactly the sorting path's tests, each once, at 1 and 2
+  // threads (enough pairs for parallel chunks), and only moved tests when asked.
+  std::mt19937_64 rng(11);
+  std::normal_distribution<Scalar> wobble(0, 0.3);
+  Sheet s = grid(40, 40, [&](Scalar u, Scalar v) {
+    const Vec3 p(u * 0.5, v * 0.5, 0.3 * std::sin(u * 0.4) + wobble(rng));
+    return std::pair{p, Vec3(p + Vec3(0, 0, wobble(rng)))};
+  });
+  const Sheet other = grid(30, 30, [&](Scalar u, Scalar v) {
+    const Vec3 p(u * 0.66 + 0.1, v * 0.66 + 0.2, 0.2 + wobble(rng));
+    return std::pair{p, Vec3(p - Vec3(0, 0, 0.3))};
+  });
+  const auto offset = std::int32_t(s.start.size());
+  s.start.insert(s.start.end(), other.start.begin(), other.start.end());
+  s.end.insert(s.end.end(), other.end.begin(), other.end.end());
+  std::vector<TriangleIndices> cloth = s.triangles, mesh;
+  for (TriangleIndices t : other.triangles) mesh.push_back({t[0] + offset, t[1] + offset, t[2] + offset});
+  for (std::size_t t = 0, n = mesh.size(); t < n; t += 7) mesh.push_back(mesh[t]);  // duplicated faces
+  std::vector<Aabb> cloth_boxes, mesh_boxes;
+  for (const auto& t : cloth) cloth_boxes.push_back(swept_box(t, s.start, s.end, 0.05));
+  for (const auto& t : mesh) mesh_boxes.push_back(swept_box(t, s.start, s.end, 0.05));
+  BoxTree a, b;
+  a.update(cloth_boxes);
+  b.update(mesh_boxes);
+  const Pairs pairs = a.pairs_with(b);
+  ASSERT_GT(pairs.size(), 8192u);  // parallel chunks at 2 threads
+  const auto volumes = vertex_volumes(s.start, s.end, 0.05);
+  const FeatureOwners cloth_owners = feature_owners(cloth), mesh_owners = feature_owners(mesh);
+  std::vector<std::uint8_t> moved(s.start.size(), 0);
+  for (std::size_t v = 0; v < moved.size(); v += 5) moved[v] = 1;
+  for (const bool restricted : {false, true}) {
+    const std::span<const std::uint8_t> flags = restricted ? std::span<const std::uint8_t>(moved) : std::span<const std::uint8_t>{};
+    const Candidates sorted = feature_pairs(cloth, mesh, pairs, volumes, 1, flags);
+    ASSERT_GT(sorted.vertex_face.size(), 100u);
+    ASSERT_GT(sorted.edge_edge.size(), 100u);
+    for (int threads : {1, 2}) {
+      Candidates once = feature_pairs(cloth, mesh, pairs, cloth_owners, mesh_owners, volumes, threads, flags);
+      std::sort(once.vertex_face.begin(), once.vertex_face.end(), [](const auto& x, const auto& y) {
+        return std::tie(x.vertex, x.face) < std::tie(y.vertex, y.face);
+      });
+      std::sort(once.edge_edge.begin(), once.edge_edge.end(), [](const auto& x, const auto& y) {
+        return std::tie(x.edge_a, x.edge_b) < std::tie(y.edge_a, y.edge_b);
+      });
+      ASSERT_EQ(once.vertex_face.size(), sorted.vertex_face.size()) << threads << " threads, restricted " << restricted;
+      ASSERT_EQ(once.edge_edge.size(), sorted.edge_edge.size()) << threads << " threads, restricted " << restricted;
+      for (std::size_t i = 0; i < once.vertex_face.size(); ++i)
+        ASSERT_TRUE(once.vertex_face[i].vertex == sorted.vertex_face[i].vertex && once.vertex_face[i].face == sorted.vertex_face[i].face);
+      for (std::size_t i = 0; i < once.edge_edge.size(); ++i)
+        ASSERT_TRUE(once.edge_edge[i].edge_a == sorted.edge_edge[i].edge_a && once.edge_edge[i].edge_b == sorted.edge_edge[i].edge_b);
+    }
+  }
+}

@@ -94,7 +94,8 @@ using TriangleIndices = std::array<std::int32_t, 3>;
 
 /// Which triangle answers for each corner and edge of a mesh: the first triangle holding it
 /// (representative triangles, Curtis, Tamstorf and Manocha 2008). Per triangle, bit k is set
-/// when it answers for corner k and bit 3 + i when it answers for edge i (corner i to i + 1).
+/// when it answers for corner k, bit 3 + i when it answers for edge i (corner i to i + 1), and
+/// bit 6 when it answers for its face (no earlier triangle has the same corners).
 struct FeatureOwners {
   std::vector<std::uint8_t> bits;
 };
@@ -113,8 +114,10 @@ Candidates feature_pairs(std::span<const TriangleIndices> triangles_a, std::span
 /// (owners_a of triangles_a, owners_b of triangles_b), in the order of pairs and not sorted: no
 /// sort and no removal of repeats. pairs must hold every pair of triangles whose boxes (grown
 /// by the volumes' margin) overlap, adjacent ones too, but for pairs inside a region whose
-/// features cannot touch (ccd::PatchTree's culled patches). The same tests as the overload
-/// above, except those inside such regions that reached it through a pair outside them.
+/// features cannot touch (ccd::PatchTree's culled patches). With vertex volumes, the same tests
+/// as the overload above, except those inside such regions that reached it through a pair
+/// outside them; without, fewer (a test only from its own features' triangles, not from every
+/// overlapping pair holding them): the paper's count needs the overload above.
 Candidates feature_pairs(std::span<const TriangleIndices> triangles_a, std::span<const TriangleIndices> triangles_b,
                          std::span<const std::pair<std::int32_t, std::int32_t>> pairs, const FeatureOwners& owners_a,
                          const FeatureOwners& owners_b, std::span<const FeatureVolume> vertex_volumes = {}, int threads = 1,
