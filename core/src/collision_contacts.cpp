@@ -1,0 +1,104 @@
+#include <algorithm>
+#include <cmath>
+#include <map>
+
+#include "collision_pipeline.h"
+#include "drape/ccd/distance.h"
+#include "drape/core/obstacle.h"
+
+namespace drape {
+
+std::vector<SolveContact> CollisionPipeline::mesh_contacts(const std::vector<Vec3>& start, Scalar t, Scalar h,
+                                                           Scalar reach) {
+  Impl& m = *impl_;
+  std::vector<SolveContact> out;
+  if (m.obstacles.empty()) return out;
+  for (int v = 0; v < m.cloth_vertices; ++v) m.start[v] = m.end[v] = start[v];
+  m.pose_obstacles(t, h);
+  CollisionCounters unused;
+  ccd::Candidates c = m.candidates(reach, unused, false);
+  // In a whole round's order (feature_pairs' owners leave the tests unsorted): which of several
+  // nearly equal contacts is kept depends on it.
+  const auto vf_key = [&](const ccd::VertexFacePair& p) {
+    const std::array<int, 4> v{p.vertex, p.face[0], p.face[1], p.face[2]};
+    return std::make_pair(m.source(v), v);
+  };
+  const auto ee_key = [&](const ccd::EdgeEdgePair& p) {
+    const std::array<int, 4> v{p.edge_a[0], p.edge_a[1], p.edge_b[0], p.edge_b[1]};
+    return std::make_pair(m.source(v), v);
+  };
+  std::sort(c.vertex_face.begin(), c.vertex_face.end(), [&](const auto& a, const auto& b) { return vf_key(a) < vf_key(b); });
+  std::sort(c.edge_edge.begin(), c.edge_edge.end(), [&](const auto& a, const auto& b) { return ee_key(a) < ee_key(b); });
+  // Per cloth feature (its vertices), its nearest obstacle points in distinct directions.
+  std::map<std::array<int, 3>, std::vector<std::pair<Scalar, SolveContact>>> near;
+  const auto free = [&](int v) { return v < m.cloth_vertices && m.inverse_mass[std::size_t(v)] > 0; };
+  const auto velocity = [&](int v) -> Vec3 { return (m.end[v] - m.start[v]) / h; };
+  // offset: from the obstacle's point to the cloth's; obstacle_velocity: of the obstacle's point.
+  const auto add = [&](SolveContact contact, const Vec3& offset, const Vec3& obstacle_velocity) {
+    const Scalar distance = offset.norm();
+    if (!(distance < reach) || !(distance > 0)) return;
+    contact.normal = offset / distance;
+    contact.surface_velocity = obstacle_velocity;
+    contact.target = contact.normal.dot(obstacle_velocity);
+    std::array<int, 3> key = contact.vertex;
+    std::sort(key.begin(), key.end());
+    auto& list = near[key];
+    for (auto& [d, known] : list)
+      if (known.normal.dot(contact.normal) > SAME_DIRECTION) {
+        if (distance < d) d = distance, known = contact;
+        return;
+      }
+    list.emplace_back(distance, contact);
+  };
+  const auto inner = [](Scalar w) { return w > INNER_WEIGHT && w < 1 - INNER_WEIGHT; };
+  const auto& x = m.start;
+  for (const auto& p : c.vertex_face) {
+    const auto& f = p.face;
+    const auto closest = ccd::closest_point_triangle<Scalar>(x[p.vertex], x[f[0]], x[f[1]], x[f[2]]);
+    const Scalar wb = closest.weight_b, wc = closest.weight_c, wa = 1 - wb - wc;
+    SolveContact contact;
+    if (free(p.vertex)) {  // a cloth vertex and an obstacle's triangle
+      contact.vertex = {p.vertex, -1, -1};
+      contact.weight = {1, 0, 0};
+      add(contact, x[p.vertex] - closest.point, wa * velocity(f[0]) + wb * velocity(f[1]) + wc * velocity(f[2]));
+    } else if (p.vertex >= m.cloth_vertices && free(f[0]) && free(f[1]) && free(f[2]) && inner(wa) && inner(wb) &&
+               inner(wc)) {  // an obstacle's vertex and a cloth triangle
+      contact.vertex = {f[0], f[1], f[2]};
+      contact.weight = {wa, wb, wc};
+      contact.count = 3;
+      add(contact, closest.point - x[p.vertex], velocity(p.vertex));
+    }
+  }
+  for (const auto& p : c.edge_edge) {  // edge_a is the cloth's (its indices are the smaller)
+    if (!free(p.edge_a[0]) || !free(p.edge_a[1])) continue;
+    const auto closest = ccd::closest_segment_segment<Scalar>(x[p.edge_a[0]], x[p.edge_a[1]], x[p.edge_b[0]], x[p.edge_b[1]]);
+    if (!inner(closest.s) || !inner(closest.u)) continue;  // a vertex's contact, found as such
+    SolveContact contact;
+    contact.vertex = {p.edge_a[0], p.edge_a[1], -1};
+    contact.weight = {1 - closest.s, closest.s, 0};
+    contact.count = 2;
+    add(contact, closest.point_a - closest.point_b,
+        (1 - closest.u) * velocity(p.edge_b[0]) + closest.u * velocity(p.edge_b[1]));
+  }
+  // An edge's or triangle's contact whose every vertex has its own contact in that direction
+  // would over-determine the solve (penalties with different targets fighting): dropped.
+  std::map<int, std::vector<Vec3>> vertex_normals;
+  for (const auto& [key, list] : near)
+    for (const auto& [d, contact] : list)
+      if (contact.count == 1) vertex_normals[contact.vertex[0]].push_back(contact.normal);
+  const auto has_own = [&](int v, const Vec3& normal) {
+    const auto found = vertex_normals.find(v);
+    if (found == vertex_normals.end()) return false;
+    return std::any_of(found->second.begin(), found->second.end(),
+                       [&](const Vec3& n) { return n.dot(normal) > SAME_DIRECTION; });
+  };
+  for (const auto& [key, list] : near)
+    for (const auto& [d, contact] : list) {
+      bool covered = contact.count > 1;
+      for (int i = 0; i < contact.count && covered; ++i) covered = has_own(contact.vertex[i], contact.normal);
+      if (!covered) out.push_back(contact);
+    }
+  return out;
+}
+
+}  // namespace drape

@@ -1,0 +1,213 @@
+#pragma once
+/// \file
+/// The collision pipeline's state and stages (internal to core): detection in collision.cpp,
+/// the response (impulses, impact zones, proximity repulsion) in collision_response.cpp, and the
+/// implicit solve's mesh contacts in collision_contacts.cpp.
+
+#include <algorithm>
+#include <array>
+#include <chrono>
+#include <cstdint>
+#include <map>
+#include <numeric>
+#include <span>
+#include <tuple>
+#include <utility>
+#include <vector>
+
+#include "drape/ccd/broad_phase.h"
+#include "drape/ccd/patch_tree.h"
+#include "drape/core/collision.h"
+#include "drape/core/obstacle.h"
+
+namespace drape {
+
+// Two directions from a cloth vertex to an obstacle closer than this cosine are one contact
+// of the implicit solve (mesh_contacts): the nearest of them is kept.
+inline constexpr Scalar SAME_DIRECTION = 0.95;
+// An edge-edge or obstacle-vertex contact of the implicit solve is kept only when its closest
+// points lie inside both features by more than this weight; otherwise it is a cloth vertex's
+// contact with an obstacle's triangle, found as such.
+inline constexpr Scalar INNER_WEIGHT = 0.01;
+// The simultaneous impulses of a round (Impl::impulses): at most this many Gauss-Seidel sweeps,
+// fewer once no impulse changes by more than IMPULSE_TOLERANCE times thickness / h.
+inline constexpr int IMPULSE_SWEEPS = 100;
+inline constexpr Scalar IMPULSE_TOLERANCE = 1e-3;
+
+using Clock = std::chrono::steady_clock;
+inline double ms_since(Clock::time_point begin) { return std::chrono::duration<double, std::milli>(Clock::now() - begin).count(); }
+
+// A contact between four vertices: the relative velocity along normal is sum_k weight_k v_k . n.
+struct Contact {
+  bool vertex_face = true;  // else edge-edge
+  std::array<int, 4> vertex{};
+  std::array<Scalar, 4> weight{};
+  Vec3 normal = Vec3::UnitZ();
+};
+
+// Union-find over vertices, for impact zones.
+struct Zones {
+  std::vector<int> parent;
+  explicit Zones(int n) : parent(n) { std::iota(parent.begin(), parent.end(), 0); }
+  int find(int v) { return parent[v] == v ? v : parent[v] = find(parent[v]); }
+  void join(int a, int b) {
+    a = find(a), b = find(b);
+    if (a != b) parent[std::max(a, b)] = std::min(a, b);  // deterministic representative
+  }
+};
+
+struct CollisionPipeline::Impl {
+  const Model& model;
+  CollisionSettings settings;
+  int cloth_vertices = 0;
+  std::vector<ccd::TriangleIndices> cloth_triangles;
+  struct MeshObstacle {
+    const Obstacle* obstacle;
+    int first_vertex;
+    std::vector<ccd::TriangleIndices> triangles;  // indices into the combined vertex array
+    ccd::BoxTree tree;
+    ccd::FeatureOwners owners;
+  };
+  std::vector<MeshObstacle> obstacles;
+  ccd::BoxTree cloth_tree;     // the cloth's triangles, against the mesh obstacles (and itself without self_culling)
+  ccd::PatchTree patch_tree;   // self-collision with self_culling
+  ccd::FeatureOwners cloth_owners;  // which triangle makes the tests of each cloth vertex and edge
+  std::vector<Scalar> inverse_mass;  // combined array; 0 for kinematic vertices
+  std::vector<int> cloth_of_vertex;  // cloth vertices only: the index of their cloth
+  std::vector<Vec3> start, end;      // combined positions at t and t + h
+  std::vector<ccd::Aabb> boxes;
+  std::vector<ccd::FeatureVolume> features;  // per-vertex swept volumes for feature_pairs (empty: no feature culling)
+  ccd::Options options;
+  CollisionPipeline::Observer observer;
+
+  explicit Impl(const Model& m, const CollisionSettings& s);
+
+  // Candidate elementary tests for the motion start -> end, boxes grown by margin; the cloth
+  // against itself too when self-collision is on and self is asked for; with moved (a flag per
+  // vertex), only the tests with a moved vertex.
+  ccd::Candidates candidates(Scalar margin, CollisionCounters& counters, bool self = true,
+                             std::span<const std::uint8_t> moved = {});
+
+  // The mesh obstacles' vertices at t (start) and t + h (end).
+  void pose_obstacles(Scalar t, Scalar h) {
+    for (const MeshObstacle& mo : obstacles) {
+      const auto now = posed_vertices(*mo.obstacle, t), next = posed_vertices(*mo.obstacle, t + h);
+      std::copy(now.begin(), now.end(), start.begin() + mo.first_vertex);
+      std::copy(next.begin(), next.end(), end.begin() + mo.first_vertex);
+    }
+  }
+
+  void set_end(Scalar h, const std::vector<Vec3>& motion) {
+    for (int v = 0; v < cloth_vertices; ++v) end[v] = start[v] + h * motion[v];
+  }
+
+  // Velocity of any vertex of the combined array: cloth from motion, obstacles from their poses.
+  Vec3 velocity(int v, Scalar h, const std::vector<Vec3>& motion) const {
+    return v < cloth_vertices ? motion[v] : Vec3((end[v] - start[v]) / h);
+  }
+
+  // The contact's relative velocity, sum_k weight_k v_k.
+  Vec3 relative_velocity(const Contact& c, Scalar h, const std::vector<Vec3>& motion) const {
+    Vec3 relative = Vec3::Zero();
+    for (int k = 0; k < 4; ++k) relative += c.weight[k] * velocity(c.vertex[k], h, motion);
+    return relative;
+  }
+
+  // The contacts of a step's response so far, each with the least relative normal velocity it
+  // asks for (its target), the impulse it has applied (as the change of its own relative
+  // normal velocity) and the tangential change its friction has made.
+  struct ContactSet {
+    std::vector<Contact> contacts;
+    std::vector<Scalar> target, pushed, rubbed, denominator;
+    std::map<std::pair<bool, std::array<int, 4>>, std::size_t> index;  // by kind and vertices
+    // Adds a contact, or renews one found before (its impulse so far kept, the larger target).
+    void add(const Contact& c, Scalar target_c, const std::vector<Scalar>& inverse_mass) {
+      Scalar d = 0;
+      for (int k = 0; k < 4; ++k) d += c.weight[k] * c.weight[k] * inverse_mass[c.vertex[k]];
+      // (a vertex-face contact 1; 2 3 4 and an edge-edge one 1 2 - 3 4 are two contacts)
+      const auto [place, added] = index.emplace(std::make_pair(c.vertex_face, c.vertex), contacts.size());
+      if (!added) {
+        const std::size_t i = place->second;
+        // An impulse along a normal that has turned can no longer be taken back along the new one.
+        if (contacts[i].normal.dot(c.normal) < SAME_DIRECTION) pushed[i] = 0, rubbed[i] = 0;
+        contacts[i] = c;
+        target[i] = std::max(target[i], target_c);
+        denominator[i] = d;
+        return;
+      }
+      contacts.push_back(c);
+      target.push_back(target_c);
+      pushed.push_back(0);
+      rubbed.push_back(0);
+      denominator.push_back(d);
+    }
+  };
+
+  // The inelastic impulses of all the contacts so far, solved together (each a change of its
+  // relative normal velocity, shared among its vertices by inverse mass and weight, Bridson,
+  // Fedkiw and Anderson 2002, section 7.2): projected Gauss-Seidel over accumulated impulses
+  // that never turn negative, so that a later contact, of this round or a later one, may take
+  // back what an earlier one overdid (applied one after another, contacts of one edge with a
+  // triangulated leg sent its vertex back at nearly its approach speed). Then Coulomb friction:
+  // each contact's relative tangential velocity shrinks by friction times its normal impulse in
+  // all, never reversing. Returns how many contacts push.
+  int impulses(ContactSet& set, Scalar h, std::vector<Vec3>& motion) const;
+
+  // The contact of a vertex-face or edge-edge pair: weights from the closest points at time s
+  // of the step, normal from the features at toc oriented as they were at the start.
+  Contact contact(bool vertex_face, const std::array<int, 4>& v, Scalar toc) const;
+
+  // The order of a whole round's contacts, which the response keeps (its impulses are solved in
+  // that order): vertex-face before edge-edge, each kind the cloth's own and then each mesh
+  // obstacle's, each of those by its vertices.
+  bool listed_before(const Contact& a, const Contact& b) const {
+    return std::make_tuple(!a.vertex_face, source(a.vertex), a.vertex) < std::make_tuple(!b.vertex_face, source(b.vertex), b.vertex);
+  }
+  // Which list a test comes from: 0 the cloth's own, k the k-th mesh obstacle's.
+  int source(const std::array<int, 4>& vertices) const {
+    const int highest = *std::max_element(vertices.begin(), vertices.end());
+    int block = 0;
+    for (const MeshObstacle& mo : obstacles) block += highest >= mo.first_vertex;
+    return block;
+  }
+
+  // The time of contact the response uses: vincent's for any method that agrees on the hit,
+  // so that the method chosen changes the cost of detection, never the simulation (cubic and
+  // dnf find the same roots, to rounding; those last bits would otherwise grow into different
+  // trajectories). Where vincent sees no hit (conservative's near misses), the method's own.
+  Scalar canonical_toc(ccd::QueryKind kind, const ccd::Query& query, Scalar toc) const;
+
+  // One detection round: the collisions of the current motion. A later round passes the flags
+  // of the vertices whose motion changed since the round before, and that round's hits: the
+  // tests without a moved vertex have the motion that round tested, so its hits among them
+  // stand and only the others are run (the hits in the order a whole round gives them).
+  std::vector<std::pair<Contact, Scalar>> detect(Scalar h, const std::vector<Vec3>& motion, CollisionCounters& counters,
+                                                 ccd::Candidates* keep = nullptr,
+                                                 const std::vector<std::uint8_t>* moved = nullptr,
+                                                 const std::vector<std::pair<Contact, Scalar>>* before = nullptr);
+
+  // The self-collision response must not push cloth into a sphere or plane (the integrator
+  // answered those before): a free vertex whose end position lies within half the thickness of
+  // one is moved back out to that depth. Runs before every re-detection, so what the final
+  // detection sees is both above the shapes and, when it finds nothing, intersection-free.
+  void keep_out_of_analytic_obstacles(Scalar t_next, Scalar h, std::vector<Vec3>& motion) const;
+
+  // The gap kept between two features: the thickness, but for features of one cloth that are
+  // closer than it in the rest shape (neighbours on a mesh finer than the thickness), which
+  // keep rest_fraction of their rest distance (docs/collisions.md, "Thickness and the rest
+  // shape"). Pairs with an obstacle vertex, or across two cloths, keep the thickness.
+  Scalar kept_gap(bool vertex_face, const std::array<int, 4>& v, CollisionCounters& counters) const;
+
+  // Proximity repulsion (Bridson, Fedkiw and Anderson 2002, section 7.2: its inelastic impulse,
+  // without the spring push that follows): features closer than their kept gap at the start
+  // get, all together, the impulses that stop their approach, and no more. Never a separating
+  // velocity: the normal kinetic energy only falls, and a resting or freely falling cloth gets
+  // none.
+  void repel(const ccd::Candidates& c, Scalar h, std::vector<Vec3>& motion, ContactSet& set, CollisionCounters& counters);
+
+  // Rigid impact zones: each zone's cloth vertices move with the zone's rigid motion (its
+  // momentum and angular momentum kept), or with its kinematic vertices when it holds any.
+  void apply_zones(Zones& zones, Scalar h, std::vector<Vec3>& motion, CollisionCounters& counters);
+};
+
+}  // namespace drape
