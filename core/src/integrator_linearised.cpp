@@ -1,0 +1,264 @@
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+
+#include "drape/core/integrator.h"
+#include "drape/core/obstacle.h"
+#include "integrator_workspace.h"
+
+namespace drape {
+
+void Integrator::assemble(const std::vector<Vec3>& x, const std::vector<Vec3>& v, std::vector<Vec3>& forces,
+                          std::vector<Vec3>* stiffness_times_v, const std::vector<Vec3>* pinned_dv,
+                          std::vector<Vec3>* coupling) {
+  const Model& m = model_;
+  Workspace& w = *work_;
+  const Scalar h = h_;
+  const int n = int(m.vertex_count());
+  std::fill(w.matrix.valuePtr(), w.matrix.valuePtr() + w.matrix.nonZeros(), 0.0);
+  for (int k = 0; k < n; ++k)
+    if (w.free_index[k] >= 0)  // M - h d(air drag)/dv
+      w.add_block(w.diagonal[w.free_index[k]], m.masses[k] * (1 + h * m.air_damping[k]) * Mat3::Identity());
+  for (std::size_t k = 0; k < m.springs.size(); ++k) {
+    const Spring& s = m.springs[k];
+    const SpringEvaluation e = evaluate_spring(x[s.i], x[s.j], v[s.i], v[s.j], s.rest_length, s.stiffness, s.damping);
+    forces[s.i] += e.force;
+    forces[s.j] -= e.force;
+    if (stiffness_times_v) {
+      const Vec3 kv = e.d_force_d_x * (v[s.i] - v[s.j]);
+      (*stiffness_times_v)[s.i] += kv;
+      (*stiffness_times_v)[s.j] -= kv;
+    }
+    const Mat3 diagonal_block = -h * e.d_force_d_v - h * h * e.d_force_d_x;  // A's (i,i) and (j,j)
+    const int a = w.free_index[s.i], b = w.free_index[s.j];
+    if (a >= 0) w.add_block(w.diagonal[a], diagonal_block);
+    if (b >= 0) w.add_block(w.diagonal[b], diagonal_block);
+    if (a >= 0 && b >= 0) {
+      w.add_block(w.spring_blocks[k].ij, -diagonal_block);
+      w.add_block(w.spring_blocks[k].ji, -diagonal_block);
+    } else if (coupling && a >= 0) {  // j prescribed: A's (i,j) block times its dv moves to the right-hand side
+      (*coupling)[s.i] -= diagonal_block * (*pinned_dv)[s.j];
+    } else if (coupling && b >= 0) {
+      (*coupling)[s.j] -= diagonal_block * (*pinned_dv)[s.i];
+    }
+  }
+  // The bending hinges: F_i = -k_i (u + c du/dt) with u = sum k_j x_j, so -dF_i/dx_j = k_i k_j I
+  // and -dF_i/dv_j = c k_i k_j I, constant (Hinge).
+  for (std::size_t k = 0; k < m.hinges.size(); ++k) {
+    const Hinge& hinge = m.hinges[k];
+    const Vec3 du = hinge_vector(hinge, v), pull = hinge_pull(hinge, x, v);
+    const Scalar weight = h * hinge.damping + h * h;  // A's (i, j) block over k_i k_j
+    for (int i = 0; i < 4; ++i) {
+      const int vi = hinge.v[std::size_t(i)];
+      const Scalar ki = hinge.k[std::size_t(i)];
+      if (ki == 0) continue;
+      forces[std::size_t(vi)] -= ki * pull;
+      if (stiffness_times_v) (*stiffness_times_v)[std::size_t(vi)] -= ki * du;
+      const int a = w.free_index[std::size_t(vi)];
+      if (a < 0) continue;
+      for (int j = 0; j < 4; ++j) {
+        const int vj = hinge.v[std::size_t(j)];
+        const Scalar block = weight * ki * hinge.k[std::size_t(j)];
+        if (block == 0) continue;
+        if (w.free_index[std::size_t(vj)] >= 0) w.add_block(w.hinge_blocks[k][std::size_t(i)][std::size_t(j)], block * Mat3::Identity());
+        else if (coupling) (*coupling)[std::size_t(vi)] += block * (*pinned_dv)[std::size_t(vj)];
+      }
+    }
+  }
+}
+
+bool Integrator::solve_linearised(State& state, const std::vector<Vec3>& pinned_dv, StepReport& report) {
+  const Model& m = model_;
+  Workspace& w = *work_;
+  const Scalar h = h_;
+  const int n = int(m.vertex_count());
+  // The system matrix A = M - h dF/dv - h^2 dF/dx over the free vertices, and the right-hand
+  // side h (F + h dF/dx v) less A's coupling to the prescribed dv; spring forces join the
+  // workspace's.
+  std::vector<Vec3> stiffness_times_v(n, Vec3::Zero());  // dF/dx v
+  std::vector<Vec3> coupling(n, Vec3::Zero());           // A_(free, pinned) dv_pinned
+  assemble(state.positions, state.velocities, w.forces, &stiffness_times_v, &pinned_dv, &coupling);
+  for (int v = 0; v < n; ++v) {
+    const int a = w.free_index[v];
+    if (a >= 0) w.rhs.segment<3>(3 * a) = h * (w.forces[v] + h * stiffness_times_v[v]) - coupling[v];
+  }
+  // The matrix as assembled, kept for the response's re-solve (spread_response) when the
+  // contacts' penalties and friction are about to change it.
+  if (!w.contacts.empty()) w.assembled.assign(w.matrix.valuePtr(), w.matrix.valuePtr() + w.matrix.nonZeros());
+  // Each free vertex's own scale in the system, for the penalties that hold it: its diagonal
+  // block's largest entry (the mass, or h^2 k where springs are stiffer), before any penalty.
+  w.scale.resize(std::size_t(w.free_count));
+  for (int a = 0; a < w.free_count; ++a) {
+    w.scale[std::size_t(a)] = 0;
+    for (int c = 0; c < 3; ++c) w.scale[std::size_t(a)] = std::max(w.scale[std::size_t(a)], w.matrix.valuePtr()[w.diagonal[a][c] + c]);
+  }
+
+  // The contacts known at the step's start, held along their normals by a penalty: a contact's
+  // cloth points may not approach the obstacle faster than its target. A contact that pulls
+  // them towards the obstacle (its impulse negative) is released and the step solved again,
+  // once: one that pulls after that stays held for this step (counted as no force).
+  const auto normal_velocity = [&](const SolveContact& c, const VectorX* dv) {
+    Scalar speed = 0;
+    for (int i = 0; i < c.count; ++i) {
+      Vec3 v = state.velocities[c.vertex[i]];
+      if (dv) v += dv->segment<3>(3 * w.free_index[std::size_t(c.vertex[i])]);
+      speed += c.weight[i] * c.normal.dot(v);
+    }
+    return speed;
+  };
+  const auto hold_contacts = [&](Scalar sign, const std::vector<char>& which) {
+    for (std::size_t k = 0; k < w.contacts.size(); ++k) {
+      if (!which[k]) continue;
+      const SolveContact& c = w.contacts[k];
+      const Scalar hold = sign * w.contact_holds[k];
+      const Mat3 nn = c.normal * c.normal.transpose();
+      const Scalar missing = c.target - normal_velocity(c, nullptr);
+      for (int i = 0; i < c.count; ++i) {
+        for (int j = 0; j < c.count; ++j) w.add_block(w.contact_blocks[k][i][j], hold * c.weight[i] * c.weight[j] * nn);
+        w.rhs.segment<3>(3 * w.free_index[std::size_t(c.vertex[i])]) += hold * c.weight[i] * missing * c.normal;
+      }
+    }
+  };
+  // Coulomb friction of the contacts, in the solve, from the normal force each vertex's
+  // contacts made the step before (lagged, as in Baraff and Witkin 1998, section 5.3): a vertex
+  // slipping across its contact's normal at the step's start feels friction times that force
+  // against its slip. Where that could stop the slip within the step, as an implicit drag that
+  // reaches the force at the slip speed (or at FRICTION_SLIP, for a vertex slower than that),
+  // so it never reverses the slip and holds what sticks; otherwise as the force itself,
+  // linearised at the slip (constant along it, turning it across). In the solve, the neighbours of
+  // a vertex it holds are held with it (applied after the solve, it stopped a tablecloth's rim
+  // vertices while the springs to the hanging side had been solved for them sliding: the
+  // springs stretched).
+  const Scalar mu = m.scene.friction;
+  struct Friction {
+    int vertex;
+    Mat3 block;    // its term of the matrix
+    Vec3 pushed;   // and of the right-hand side: its impulse is pushed - block dv
+    Vec3 surface;  // the obstacle's velocity
+  };
+  std::vector<Friction> frictions;  // on moving obstacles, for the work they do
+  if (mu > 0 && !w.contacts.empty()) {
+    const std::vector<int> strongest = strongest_contacts(w.contacts, n);
+    for (int v = 0; v < n; ++v) {
+      const int k = strongest[std::size_t(v)];
+      if (k < 0 || !(w.normal_force[std::size_t(v)] > 0)) continue;
+      const SolveContact& c = w.contacts[std::size_t(k)];
+      const Mat3 across = Mat3::Identity() - c.normal * c.normal.transpose();
+      const Vec3 slip = across * (state.velocities[v] - c.surface_velocity);
+      const Scalar force = mu * w.normal_force[std::size_t(v)], speed = slip.norm();
+      const int a = w.free_index[v];
+      Mat3 block;
+      Vec3 pushed;
+      if (h * force >= m.masses[v] * speed) {  // it can stop the slip within the step: a drag
+        const Scalar drag = force / std::max(speed, FRICTION_SLIP);
+        block = h * drag * across;
+        pushed = -h * drag * slip;
+      } else {
+        const Vec3 direction = slip / speed;
+        block = h * force / speed * (across - direction * direction.transpose());
+        pushed = -h * force * direction;
+      }
+      w.add_block(w.diagonal[a], block);
+      w.rhs.segment<3>(3 * a) += pushed;
+      if (c.surface_velocity != Vec3::Zero()) frictions.push_back({v, block, pushed, c.surface_velocity});
+    }
+  }
+
+  w.contact_holds.assign(w.contacts.size(), 0);
+  for (std::size_t k = 0; k < w.contacts.size(); ++k) {
+    Scalar scale = 0;
+    for (int i = 0; i < w.contacts[k].count; ++i)
+      scale = std::max(scale, w.scale[std::size_t(w.free_index[std::size_t(w.contacts[k].vertex[i])])]);
+    w.contact_holds[k] = RESPONSE_HOLD * scale;
+  }
+  std::vector<char> held(w.contacts.size(), 1);
+  hold_contacts(1, held);
+  w.contact_impulses.assign(w.contacts.size(), 0);
+  for (int attempt = 0;; ++attempt) {
+    if (!solve(report, "the linear solver failed: ")) return false;
+    std::vector<char> pulling(w.contacts.size(), 0);
+    bool any = false;
+    for (std::size_t k = 0; k < w.contacts.size(); ++k) {
+      if (!held[k]) continue;
+      w.contact_impulses[k] = w.contact_holds[k] * (w.contacts[k].target - normal_velocity(w.contacts[k], &w.solution));
+      if (!(w.contact_impulses[k] < 0)) continue;
+      // A pull too weak to move its vertices by a negligible distance within the step stays
+      // held (not worth solving again); a stronger one is released.
+      const SolveContact& c = w.contacts[k];
+      Scalar mass = 0;
+      for (int i = 0; i < c.count; ++i) mass = std::max(mass, m.masses[std::size_t(c.vertex[i])]);
+      if (-w.contact_impulses[k] * h > mass * NEGLIGIBLE_MOTION * m.scene.collisions.thickness)
+        pulling[k] = 1, held[k] = 0, any = true;
+      w.contact_impulses[k] = 0;
+    }
+    if (!any || attempt == 1) break;
+    hold_contacts(-1, pulling);
+  }
+  // The work the held contacts did on the cloth at moving obstacles' velocities (their normal
+  // impulses and their friction), for the step's energy ledger: zero on still obstacles.
+  w.contact_work = 0;
+  for (std::size_t k = 0; k < w.contacts.size(); ++k)
+    w.contact_work += w.contact_impulses[k] * w.contacts[k].normal.dot(w.contacts[k].surface_velocity);
+  for (const Friction& f : frictions)
+    w.contact_work += (f.pushed - f.block * w.solution.segment<3>(3 * w.free_index[std::size_t(f.vertex)])).dot(f.surface);
+  w.contact_work = std::max<Scalar>(0, w.contact_work);
+  // The normal forces, for the next step's friction.
+  w.normal_force.assign(std::size_t(n), 0);
+  for (std::size_t k = 0; k < w.contacts.size(); ++k)
+    for (int i = 0; i < w.contacts[k].count; ++i)
+      w.normal_force[std::size_t(w.contacts[k].vertex[i])] += w.contacts[k].weight[i] * w.contact_impulses[k] / h;
+
+  // Velocities; the motion of the step starts as the same velocities.
+  for (int v = 0; v < n; ++v) {
+    const int a = w.free_index[v];
+    state.velocities[v] += a >= 0 ? Vec3(w.solution.segment<3>(3 * a)) : pinned_dv[v];
+  }
+  return true;
+}
+
+bool Integrator::solve(StepReport& report, const std::string& failure, const VectorX* again) {
+  Workspace& w = *work_;
+  const auto begin = std::chrono::steady_clock::now();
+  const SolveReport solved = again ? solver_->solve_again(*again, w.solution) : solver_->solve(w.matrix, w.rhs, w.solution);
+  report.solve_ms += std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - begin).count();
+  report.solver_iterations += solved.iterations;
+  report.solver_converged = report.solver_converged && solved.converged;
+  if (!solved.ok) {
+    report.ok = false;
+    report.failure = failure + solved.error;
+  }
+  return solved.ok;
+}
+
+void Integrator::spread_response(const std::vector<Vec3>& solved, const std::vector<char>& held, std::vector<Vec3>& motion, std::vector<Vec3>& velocities,
+                                 StepReport& report) {
+  const Model& m = model_;
+  Workspace& w = *work_;
+  const int n = int(m.vertex_count());
+  // The step's system as the solve assembled it, without its contacts and friction (the held
+  // vertices are what the response made of them), and the held vertices' changes as penalties:
+  // linear in those changes, motion and velocities apart.
+  if (!w.contacts.empty()) std::copy(w.assembled.begin(), w.assembled.end(), w.matrix.valuePtr());
+  VectorX velocity_rhs = VectorX::Zero(w.rhs.size());
+  w.rhs.setZero();
+  for (int v = 0; v < n; ++v) {
+    const int a = w.free_index[v];
+    if (a < 0 || !held[std::size_t(v)]) continue;
+    const Scalar hold = RESPONSE_HOLD * w.scale[std::size_t(a)];
+    w.add_block(w.diagonal[a], hold * Mat3::Identity());
+    w.rhs.segment<3>(3 * a) = hold * (motion[v] - solved[v]);
+    velocity_rhs.segment<3>(3 * a) = hold * (velocities[v] - solved[v]);
+  }
+  if (!solve(report, "the linear solver failed spreading the collision response: ")) return;
+  for (int v = 0; v < n; ++v) {
+    const int a = w.free_index[v];
+    if (a >= 0 && !held[std::size_t(v)]) motion[v] = solved[v] + Vec3(w.solution.segment<3>(3 * a));
+  }
+  if (!solve(report, "the linear solver failed spreading the collision response: ", &velocity_rhs)) return;
+  for (int v = 0; v < n; ++v) {
+    const int a = w.free_index[v];
+    if (a >= 0 && !held[std::size_t(v)]) velocities[v] = solved[v] + Vec3(w.solution.segment<3>(3 * a));
+  }
+}
+
+}  // namespace drape

@@ -1,0 +1,111 @@
+#pragma once
+/// \file
+/// The integrator's constants and per-run workspace (internal to core), shared by
+/// integrator.cpp (the step), integrator_linearised.cpp (the linearised backward Euler: assembly,
+/// CHOLMOD or CG, the response spread) and integrator_projective.cpp (the projective solver's
+/// step and spread).
+
+#include <algorithm>
+#include <memory>
+#include <vector>
+
+#include "drape/core/integrator.h"
+#include "projective.h"
+
+namespace drape {
+
+// The penalty that holds a contact vertex to the velocity the collision response gave it while
+// the response is spread through the implicit system: its diagonal block's largest entry times
+// this, added to the block, so it follows its target to about 1 / RESPONSE_HOLD of its change.
+inline constexpr Scalar RESPONSE_HOLD = 1e8;
+// The linearised solve holds a cloth vertex against an obstacle (Integrator::find_contacts) when
+// it starts within this many thicknesses of it: a little more than one, since the response
+// leaves a resting vertex at the thickness.
+inline constexpr Scalar CONTACT_REACH = 1.1;
+// A change of the step's motion smaller than this fraction of the thickness is negligible: a
+// vertex the response moved by less is not held for the re-solve, and a held contact that would
+// pull its vertex by less is not released (Integrator::advance, solve_linearised).
+inline constexpr Scalar NEGLIGIBLE_MOTION = 1e-2;
+// m/s: a contact vertex slipping slower than this across its obstacle sticks (the friction in
+// Integrator::solve_linearised).
+inline constexpr Scalar FRICTION_SLIP = 1e-4;
+// The projective solve keeps the cloth this many thicknesses from spheres and planes: a held
+// contact yields a little (its penalty's force needs a depth), and within this margin it
+// yields outside the thickness, where the response after the solve has nothing to do.
+inline constexpr Scalar HELD_GAP = 1.05;
+
+// A step may end with at most this fraction of the scene's energy scale (energy_scale) more
+// than it started with, plus the sources' work; beyond it the step is taken again in 2, 4, ...
+// parts, at most 2^solver.max_halvings. The tolerance covers what the analytic obstacles'
+// projection out of the thickness adds (m g times a step's sag, far below it).
+inline constexpr Scalar STEP_ENERGY_TOLERANCE = 1e-3;
+
+// The system matrix over the free vertices, with the place of every 3x3 block in its
+// compressed storage: a block (a, b) occupies rows 3a..3a+2 of columns 3b..3b+2, and the three
+// rows of one column are contiguous, so the offset of row 3a in each column is enough.
+// Also the step's forces, contacts and scratch vectors, kept from step to step.
+struct Integrator::Workspace {
+  std::vector<int> free_index;               // vertex -> free vertex index, or -1 if pinned
+  int free_count = 0;
+  SparseMatrix matrix;
+  std::vector<std::array<int, 3>> diagonal;  // free vertex -> offsets of its (a, a) block
+  struct SpringBlocks {
+    std::array<int, 3> ij{-1, -1, -1}, ji{-1, -1, -1};
+  };
+  std::vector<SpringBlocks> spring_blocks;
+  std::vector<std::array<std::array<std::array<int, 3>, 4>, 4>> hinge_blocks;  // [hinge][i][j]: block (v_i, v_j)
+  VectorX rhs, solution;
+  std::vector<Vec3> forces;
+  // The projective step's start velocities and explicit forces (gravity, wind), kept for the
+  // response's spread.
+  std::vector<Vec3> start_velocities, explicit_forces;
+  ProjectiveContacts projective_contacts;  // what the projective step holds in its solve
+  // The contacts the linearised solve keeps, and the impulse (N s, along the normal) each
+  // applied; zero for the ones released.
+  std::vector<SolveContact> contacts;
+  std::vector<std::array<std::array<std::array<int, 3>, 3>, 3>> contact_blocks;  // [contact][i][j]: block (vertex i, vertex j)
+  std::vector<Scalar> contact_holds, contact_impulses;
+  std::vector<Scalar> assembled;  // the matrix's values before the contacts' penalties and friction
+  std::vector<Scalar> scale;  // per free vertex: its diagonal block's largest entry before penalties
+  Scalar contact_work = 0;           // J: what the held contacts did at moving obstacles in the last solve
+  std::vector<Scalar> normal_force;  // per vertex, N: what its contacts pushed with in the last solve
+
+  std::array<int, 3> block(int a, int b) const {
+    std::array<int, 3> offsets{};
+    for (int c = 0; c < 3; ++c) {
+      const int column = 3 * b + c;
+      const auto* begin = matrix.innerIndexPtr() + matrix.outerIndexPtr()[column];
+      const auto* end = matrix.innerIndexPtr() + matrix.outerIndexPtr()[column + 1];
+      offsets[c] = int(std::lower_bound(begin, end, 3 * a) - matrix.innerIndexPtr());
+    }
+    return offsets;
+  }
+  // The offsets of block (a, b) when the pattern holds it.
+  std::optional<std::array<int, 3>> find_block(int a, int b) const {
+    const int column = 3 * b;
+    const auto* begin = matrix.innerIndexPtr() + matrix.outerIndexPtr()[column];
+    const auto* end = matrix.innerIndexPtr() + matrix.outerIndexPtr()[column + 1];
+    const auto* found = std::lower_bound(begin, end, 3 * a);
+    if (found == end || *found != 3 * a) return std::nullopt;
+    return block(a, b);
+  }
+  void add_block(const std::array<int, 3>& offsets, const Mat3& value) {
+    Scalar* values = matrix.valuePtr();
+    for (int c = 0; c < 3; ++c)
+      for (int r = 0; r < 3; ++r) values[offsets[c] + r] += value(r, c);
+  }
+};
+
+// Each vertex's contact of largest weight among contacts (-1: none), for its friction.
+inline std::vector<int> strongest_contacts(const std::vector<SolveContact>& contacts, int n) {
+  std::vector<int> strongest(std::size_t(n), -1);
+  std::vector<Scalar> weight(std::size_t(n), 0);
+  for (std::size_t k = 0; k < contacts.size(); ++k)
+    for (int i = 0; i < contacts[k].count; ++i) {
+      const std::size_t v = std::size_t(contacts[k].vertex[i]);
+      if (contacts[k].weight[i] > weight[v]) weight[v] = contacts[k].weight[i], strongest[v] = int(k);
+    }
+  return strongest;
+}
+
+}  // namespace drape
