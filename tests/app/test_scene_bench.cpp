@@ -38,3 +38,24 @@ TEST(SceneBench, DumpedTestsReadBackByDrapeCcd) {
   EXPECT_GT(queries, 1000u);
   EXPECT_LE(queries, 4000u);
 }
+
+TEST(SceneBench, SelfCullingBesideTheBtDbvtInOneRun) {
+  // fast_drop's first frames: the run without culling keeps the same state, and the patch
+  // tree's tests lose none of the btDbvt's hits (vincent's) on the identical rounds.
+  const std::string command = std::string(DRAPE_SCENE_BENCH) + " " DRAPE_SOURCE_DIR "/scenes/fast_drop.json --frames 2 --passes 1 "
+                              "--vs-btdbvt 2>&1";
+  std::string output;
+  FILE* pipe = popen(command.c_str(), "r");
+  char buffer[4096];
+  while (std::size_t n = fread(buffer, 1, sizeof buffer, pipe)) output.append(buffer, n);
+  ASSERT_EQ(pclose(pipe), 0) << output;
+  EXPECT_NE(output.find("without culling: step_ms"), std::string::npos) << output;
+  EXPECT_EQ(output.find("state differs"), std::string::npos) << output;
+  const std::size_t summary = output.find("without self_culling (btDbvt self pairs), alternating frame by frame");
+  ASSERT_NE(summary, std::string::npos) << output;
+  const std::size_t lost = output.find(" of the btDbvt tests' ", summary);
+  ASSERT_NE(lost, std::string::npos) << output;
+  EXPECT_EQ(output.substr(output.rfind("; ", lost) + 2, lost - output.rfind("; ", lost) - 2), "0") << output;
+  // Hits there were to lose: "0 of the btDbvt tests' N hits" with N > 0.
+  EXPECT_EQ(output.find(" of the btDbvt tests' 0 hits", summary), std::string::npos) << output;
+}
