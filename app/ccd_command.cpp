@@ -8,8 +8,8 @@
 #include <nlohmann/json.hpp>
 
 #include "commands.h"
-#include "drape/ccd/evaluation.h"
-#include "drape/ccd/query_file.h"
+#include "drape/ccd_eval/evaluation.h"
+#include "drape/ccd_eval/query_file.h"
 
 namespace drape::app {
 namespace {

@@ -14,9 +14,9 @@
 
 #include "ccd_peers.h"
 #include "drape/ccd/batch.h"
-#include "drape/ccd/evaluation.h"
-#include "drape/ccd/query_file.h"
-#include "drape/ccd/query_generator.h"
+#include "drape/ccd_eval/evaluation.h"
+#include "drape/ccd_eval/query_file.h"
+#include "drape/ccd_eval/query_generator.h"
 
 using namespace drape;
 using namespace drape::ccd;

@@ -7,7 +7,7 @@
 #include <chrono>
 #include <cstdio>
 
-#include "drape/ccd/evaluation.h"
+#include "drape/ccd_eval/evaluation.h"
 #include "child_process.h"
 #include "drape/core/integrator.h"
 

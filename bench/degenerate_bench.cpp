@@ -9,8 +9,8 @@
 #include <chrono>
 #include <cstdio>
 
-#include "drape/ccd/degenerate_families.h"
-#include "drape/ccd/exact_reference.h"
+#include "drape/ccd_eval/degenerate_families.h"
+#include "drape/ccd_eval/exact_reference.h"
 
 using namespace drape;
 using namespace drape::ccd;

@@ -26,7 +26,7 @@
 #include <memory>
 
 #include "child_process.h"
-#include "drape/ccd/evaluation.h"
+#include "drape/ccd_eval/evaluation.h"
 #include "drape/core/integrator.h"
 #include "drape/core/linear_solver.h"
 #include "drape/core/penetration.h"

@@ -8,7 +8,7 @@
 #include <cstdio>
 #include <filesystem>
 
-#include "drape/ccd/evaluation.h"
+#include "drape/ccd_eval/evaluation.h"
 #include "drape/render/renderer.h"
 
 using namespace drape;

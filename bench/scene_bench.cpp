@@ -16,9 +16,9 @@
 #include <tuple>
 
 #include "drape/ccd/broad_phase.h"
-#include "drape/ccd/evaluation.h"
+#include "drape/ccd_eval/evaluation.h"
 #include "drape/ccd/patch_tree.h"
-#include "drape/ccd/query_file.h"
+#include "drape/ccd_eval/query_file.h"
 #include "drape/core/integrator.h"
 #include "drape/core/penetration.h"
 

@@ -5,8 +5,8 @@
 
 #include <filesystem>
 
-#include "drape/ccd/query_file.h"
-#include "drape/ccd/query_generator.h"
+#include "drape/ccd_eval/query_file.h"
+#include "drape/ccd_eval/query_generator.h"
 
 using namespace drape;
 using namespace drape::ccd;

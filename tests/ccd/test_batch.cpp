@@ -2,7 +2,7 @@
 #include <gtest/gtest.h>
 
 #include "drape/ccd/batch.h"
-#include "drape/ccd/query_generator.h"
+#include "drape/ccd_eval/query_generator.h"
 #include "problem.h"
 
 using namespace drape;

@@ -6,7 +6,7 @@
 #include <random>
 
 #include "drape/ccd/coplanarity.h"
-#include "drape/ccd/query_generator.h"
+#include "drape/ccd_eval/query_generator.h"
 #include "problem.h"
 
 using namespace drape;

@@ -6,9 +6,9 @@
 
 #include <filesystem>
 
-#include "drape/ccd/degenerate_families.h"
-#include "drape/ccd/exact_reference.h"
-#include "drape/ccd/query_file.h"
+#include "drape/ccd_eval/degenerate_families.h"
+#include "drape/ccd_eval/exact_reference.h"
+#include "drape/ccd_eval/query_file.h"
 
 using namespace drape;
 using namespace drape::ccd;
@@ -81,8 +81,9 @@ TEST(ExactReference, EveryCaseOfTheTableIsGenerated) {
     for (const Query& q : queries)
       for (int i = 0; i < 4; ++i) EXPECT_TRUE(q.start[std::size_t(i)].allFinite() && q.end[std::size_t(i)].allFinite());
     // Interior and boundary placements touch by construction.
-    if (c.placement == DegeneratePlacement::Interior || c.placement == DegeneratePlacement::Boundary)
+    if (c.placement == DegeneratePlacement::Interior || c.placement == DegeneratePlacement::Boundary) {
       for (const Query& q : queries) EXPECT_TRUE(exact_contact(c.kind, q)) << describe(c);
+    }
   }
 }
 

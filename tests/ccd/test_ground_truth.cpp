@@ -4,7 +4,7 @@
 
 #include <filesystem>
 
-#include "drape/ccd/evaluation.h"
+#include "drape/ccd_eval/evaluation.h"
 
 using namespace drape;
 using namespace drape::ccd;

@@ -5,7 +5,7 @@
 #include <fstream>
 #include <random>
 
-#include "drape/ccd/query_file.h"
+#include "drape/ccd_eval/query_file.h"
 
 using namespace drape;
 using namespace drape::ccd;

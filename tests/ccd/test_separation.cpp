@@ -6,8 +6,8 @@
 #include <limits>
 #include <random>
 
-#include "drape/ccd/query_file.h"
-#include "drape/ccd/query_generator.h"
+#include "drape/ccd_eval/query_file.h"
+#include "drape/ccd_eval/query_generator.h"
 #include "problem.h"
 
 using namespace drape;

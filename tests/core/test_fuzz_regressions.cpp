@@ -6,7 +6,7 @@
 #include <fstream>
 #include <sstream>
 
-#include "drape/ccd/query_file.h"
+#include "drape/ccd_eval/query_file.h"
 #include "drape/core/grid.h"
 #include "drape/core/mesh.h"
 #include "drape/core/mesh_io.h"

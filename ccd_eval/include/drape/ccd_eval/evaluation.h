@@ -5,7 +5,7 @@
 #include <string>
 #include <vector>
 
-#include "drape/ccd/query_file.h"
+#include "drape/ccd_eval/query_file.h"
 
 namespace drape::ccd {
 

@@ -1,4 +1,4 @@
-#include "drape/ccd/query_generator.h"
+#include "drape/ccd_eval/query_generator.h"
 
 #include <random>
 

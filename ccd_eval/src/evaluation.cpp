@@ -1,4 +1,4 @@
-#include "drape/ccd/evaluation.h"
+#include "drape/ccd_eval/evaluation.h"
 
 #include <algorithm>
 #include <chrono>

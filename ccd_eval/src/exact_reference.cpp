@@ -1,6 +1,6 @@
 // The exact reference (exact_reference.h): polynomials in t over the rationals, their real roots
 // in [0, 1] isolated by Bernstein subdivision, and signs evaluated exactly at those roots.
-#include "drape/ccd/exact_reference.h"
+#include "drape/ccd_eval/exact_reference.h"
 
 #include <gmpxx.h>
 

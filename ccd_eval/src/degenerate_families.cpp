@@ -2,7 +2,7 @@
 // degeneracy from a line P + lambda D, then moved linearly with dyadic velocities; every number
 // is an integer over a power of two of at most 2^-12 (2^-36 for the Beside offset), at most
 // 2^8 in size, so every coordinate is exact in double before and after the scaling.
-#include "drape/ccd/degenerate_families.h"
+#include "drape/ccd_eval/degenerate_families.h"
 
 #include <algorithm>
 #include <cmath>

@@ -1,4 +1,4 @@
-#include "drape/ccd/query_file.h"
+#include "drape/ccd_eval/query_file.h"
 
 #include "drape/ccd/input_file.h"
 
