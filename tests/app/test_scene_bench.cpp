@@ -8,15 +8,25 @@
 using namespace drape::testing;
 namespace fs = std::filesystem;
 
-TEST(SceneBench, DumpedTestsReadBackByDrapeCcd) {
-  const fs::path dump = fresh_temp_path("scene_bench", "dump");
-  const std::string command = std::string(DRAPE_SCENE_BENCH) + " " DRAPE_SOURCE_DIR "/scenes/fast_drop.json --frames 1 --passes 1 "
-                              "--dump-limit 2000 --dump-ccd " + dump.string() + " 2>&1";
+namespace {
+
+// scene_bench with these arguments: its exit status and what it printed (both streams).
+std::pair<int, std::string> scene_bench(const std::string& arguments) {
+  const std::string command = std::string(DRAPE_SCENE_BENCH) + " " + arguments + " 2>&1";
   std::string output;
   FILE* pipe = popen(command.c_str(), "r");
   char buffer[4096];
   while (std::size_t n = fread(buffer, 1, sizeof buffer, pipe)) output.append(buffer, n);
-  ASSERT_EQ(pclose(pipe), 0) << output;
+  return {pclose(pipe), output};
+}
+
+}  // namespace
+
+TEST(SceneBench, DumpedTestsReadBackByDrapeCcd) {
+  const fs::path dump = fresh_temp_path("scene_bench", "dump");
+  const auto [status, output] = scene_bench(DRAPE_SOURCE_DIR "/scenes/fast_drop.json --frames 1 --passes 1 --dump-limit 2000 "
+                                            "--dump-ccd " + dump.string());
+  ASSERT_EQ(status, 0) << output;
   EXPECT_NE(output.find("0 tests where cubic, dnf or the paper's filter alone disagree with vincent"), std::string::npos) << output;
   ASSERT_TRUE(fs::exists(dump / "vertex-face" / "fast_drop_frame1.csv")) << output;
   ASSERT_TRUE(fs::exists(dump / "edge-edge" / "fast_drop_frame1.csv")) << output;
@@ -42,13 +52,8 @@ TEST(SceneBench, DumpedTestsReadBackByDrapeCcd) {
 TEST(SceneBench, SelfCullingBesideTheBtDbvtInOneRun) {
   // fast_drop's first frames: the run without culling keeps the same state, and the patch
   // tree's tests lose none of the btDbvt's hits (vincent's) on the identical rounds.
-  const std::string command = std::string(DRAPE_SCENE_BENCH) + " " DRAPE_SOURCE_DIR "/scenes/fast_drop.json --frames 2 --passes 1 "
-                              "--vs-btdbvt 2>&1";
-  std::string output;
-  FILE* pipe = popen(command.c_str(), "r");
-  char buffer[4096];
-  while (std::size_t n = fread(buffer, 1, sizeof buffer, pipe)) output.append(buffer, n);
-  ASSERT_EQ(pclose(pipe), 0) << output;
+  const auto [status, output] = scene_bench(DRAPE_SOURCE_DIR "/scenes/fast_drop.json --frames 2 --passes 1 --vs-btdbvt");
+  ASSERT_EQ(status, 0) << output;
   EXPECT_NE(output.find("without culling: step_ms"), std::string::npos) << output;
   EXPECT_EQ(output.find("state differs"), std::string::npos) << output;
   const std::size_t summary = output.find("without self_culling (btDbvt self pairs), alternating frame by frame");

@@ -42,9 +42,8 @@ Sheet grid(int nx, int ny, const Place& place) {
   return s;
 }
 
-// The contacts (as feature keys) the narrow phase finds among the features of pairs.
-std::set<std::array<std::int32_t, 5>> contacts(const Sheet& s, const Pairs& pairs) {
-  const Candidates c = feature_pairs(s.triangles, s.triangles, pairs);
+// The contacts (as feature keys) the narrow phase finds among tests.
+std::set<std::array<std::int32_t, 5>> contacts(const Sheet& s, const Candidates& c) {
   const BatchOutput out = run_batch({s.start, s.end, c.vertex_face, c.edge_edge}, Options{});
   std::set<std::array<std::int32_t, 5>> found;
   for (const BatchHit& h : out.vertex_face) {
@@ -56,6 +55,11 @@ std::set<std::array<std::int32_t, 5>> contacts(const Sheet& s, const Pairs& pair
     found.insert({1, p.edge_a[0], p.edge_a[1], p.edge_b[0], p.edge_b[1]});
   }
   return found;
+}
+
+// ... among the features of triangle pairs.
+std::set<std::array<std::int32_t, 5>> contacts(const Sheet& s, const Pairs& pairs) {
+  return contacts(s, feature_pairs(s.triangles, s.triangles, pairs));
 }
 
 // Every triangle pair whose swept boxes overlap, from the btDbvt.
@@ -372,22 +376,9 @@ TEST(PatchTree, OwnedFeaturesAreTheSameTestsOnceEach) {
     // From the patch tree's pairs: every contact of the sorting path's tests on all pairs.
     const Pairs culled = culled_pairs(s, 0.02).pairs;
     const Candidates owned = feature_pairs(s.triangles, s.triangles, culled, owners, owners, volumes);
-    const auto found = [&](const Candidates& c) {
-      const BatchOutput out = run_batch({s.start, s.end, c.vertex_face, c.edge_edge}, Options{});
-      std::set<std::array<std::int32_t, 5>> keys;
-      for (const BatchHit& h : out.vertex_face) {
-        const auto& p = c.vertex_face[h.index];
-        keys.insert({0, p.vertex, p.face[0], p.face[1], p.face[2]});
-      }
-      for (const BatchHit& h : out.edge_edge) {
-        const auto& p = c.edge_edge[h.index];
-        keys.insert({1, p.edge_a[0], p.edge_a[1], p.edge_b[0], p.edge_b[1]});
-      }
-      return keys;
-    };
-    const auto expected = found(sorted);
+    const auto expected = contacts(s, sorted);
     EXPECT_GT(expected.size(), 10u);
-    EXPECT_EQ(found(owned), expected) << "seed " << seed;
+    EXPECT_EQ(contacts(s, owned), expected) << "seed " << seed;
   }
 }
 
