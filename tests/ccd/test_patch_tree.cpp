@@ -42,6 +42,17 @@ Sheet grid(int nx, int ny, const Place& place) {
   return s;
 }
 
+// A grid on waves of 2 (frequencies along u and v), every corner moved at random (deviation
+// wobble) and then moving at random (deviation move) during the step.
+Sheet crumpled(int seed, int nx, int ny, Scalar wobble_deviation, Scalar move_deviation, std::array<Scalar, 2> waves) {
+  std::mt19937_64 rng(static_cast<std::uint64_t>(seed));
+  std::normal_distribution<Scalar> wobble(0, wobble_deviation), move(0, move_deviation);
+  return grid(nx, ny, [&](Scalar u, Scalar v) {
+    const Vec3 p(u + wobble(rng), v + wobble(rng), 2 * std::sin(u * waves[0]) * std::cos(v * waves[1]) + wobble(rng));
+    return std::pair{p, Vec3(p + Vec3(move(rng), move(rng), move(rng)))};
+  });
+}
+
 // The contacts (as feature keys) the narrow phase finds among tests.
 std::set<std::array<std::int32_t, 5>> contacts(const Sheet& s, const Candidates& c) {
   const BatchOutput out = run_batch({s.start, s.end, c.vertex_face, c.edge_edge}, Options{});
@@ -187,12 +198,7 @@ TEST(PatchTree, ACrumpledSheetKeepsEveryContact) {
   // Random heights and random motions, many times the spacing: a sheet through itself
   // everywhere, at three seeds.
   for (int seed = 1; seed <= 3; ++seed) {
-    std::mt19937_64 rng(seed);
-    std::normal_distribution<Scalar> wobble(0, 0.7), move(0, 0.6);
-    const Sheet s = grid(14, 14, [&](Scalar u, Scalar v) {
-      const Vec3 p(u + wobble(rng), v + wobble(rng), 2 * std::sin(u * 0.9) * std::cos(v * 0.7) + wobble(rng));
-      return std::pair{p, Vec3(p + Vec3(move(rng), move(rng), move(rng)))};
-    });
+    const Sheet s = crumpled(seed, 14, 14, 0.7, 0.6, {0.9, 0.7});
     EXPECT_GT(expect_no_contact_lost(s, 0.02), 10u) << "seed " << seed;
   }
 }
@@ -347,12 +353,7 @@ TEST(PatchTree, OwnedFeaturesAreTheSameTestsOnceEach) {
   // overlapping pair, exactly the tests of the sorting path, each once; from the patch tree's
   // pairs, a subset that keeps every contact.
   for (int seed = 1; seed <= 3; ++seed) {
-    std::mt19937_64 rng(seed);
-    std::normal_distribution<Scalar> wobble(0, 0.5), move(0, 0.4);
-    const Sheet s = grid(14, 12, [&](Scalar u, Scalar v) {
-      const Vec3 p(u + wobble(rng), v + wobble(rng), 2 * std::sin(u * 0.8) * std::cos(v * 0.6) + wobble(rng));
-      return std::pair{p, Vec3(p + Vec3(move(rng), move(rng), move(rng)))};
-    });
+    const Sheet s = crumpled(seed, 14, 12, 0.5, 0.4, {0.8, 0.6});
     const FeatureOwners owners = feature_owners(s.triangles);
     const auto volumes = vertex_volumes(s.start, s.end, 0.02);
     const Pairs everything = all_pairs(s, 0.02);
