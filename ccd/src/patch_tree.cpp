@@ -35,27 +35,6 @@ Aabb merged(const Aabb& a, const Aabb& b) { return {a.min.cwiseMin(b.min), a.max
 
 }  // namespace
 
-// Per-call state: the triangles' boxes (in order_'s order) and each node's box and normal
-// cone (axis, cosine and sine of the half-angle; cone_ok false when it is not within 90
-// degrees or holds a degenerate triangle).
-struct PatchTree::Motion {
-  std::span<const Vec3> start, end;
-  std::vector<Aabb> triangle_box;
-  std::vector<Aabb> box;
-  std::vector<Vec3> sum;  // area-weighted normal coefficients, summed: the cone's axis
-  std::vector<Vec3> axis;
-  std::vector<Scalar> cos, sin;
-  std::vector<char> cone_ok;
-  // Restricted to pairs with a moved triangle (moved vertices given): which triangles (in
-  // order_'s order) and which nodes hold one. Empty: every pair.
-  std::vector<char> triangle_moved, node_moved;
-  bool restricted() const { return !node_moved.empty(); }
-  bool keeps(std::int32_t i, std::int32_t j) const {
-    return !restricted() || triangle_moved[std::size_t(i)] || triangle_moved[std::size_t(j)];
-  }
-  bool holds_moved(std::int32_t node) const { return !restricted() || node_moved[std::size_t(node)]; }
-};
-
 PatchTree::PatchTree(std::span<const TriangleIndices> triangles, std::span<const Vec3> reference)
     : triangles_(triangles.begin(), triangles.end()) {
   const auto n = std::int32_t(triangles_.size());
@@ -99,6 +78,8 @@ PatchTree::PatchTree(std::span<const TriangleIndices> triangles, std::span<const
   std::iota(all.begin(), all.end(), 0);
   order_.reserve(std::size_t(n));
   build(all, scratch, reference);
+  for (std::size_t i = 0; i < nodes_.size(); ++i)
+    if (nodes_[i].right < 0) leaves_.push_back(std::int32_t(i));
 }
 
 std::int32_t PatchTree::build(std::vector<std::int32_t>& set, BuildScratch& scratch, std::span<const Vec3> reference) {
@@ -298,9 +279,11 @@ std::vector<std::pair<std::int32_t, std::int32_t>> PatchTree::self_pairs(std::sp
                                                                          std::span<const std::uint8_t> moved) {
   Pairs out;
   if (nodes_.empty()) return out;
-  Motion m;
+  Motion& m = motion_;  // kept between calls: its arrays keep their size
   m.start = start;
   m.end = end;
+  m.triangle_moved.clear();
+  m.node_moved.clear();
   const std::size_t nodes = nodes_.size();
   if (!moved.empty()) {
     m.triangle_moved.resize(order_.size());
@@ -319,17 +302,13 @@ std::vector<std::pair<std::int32_t, std::int32_t>> PatchTree::self_pairs(std::sp
     }
     if (!m.node_moved[0]) return out;
   }
-  m.triangle_box.resize(order_.size());
-  m.box.resize(nodes);
   m.sum.resize(nodes);
   m.axis.resize(nodes);
   m.cos.resize(nodes);
   m.sin.resize(nodes);
   m.cone_ok.resize(nodes);
   // The leaves: their triangles' boxes and normal cones.
-  std::vector<std::int32_t> leaves;
-  for (std::size_t i = 0; i < nodes; ++i)
-    if (nodes_[i].right < 0) leaves.push_back(std::int32_t(i));
+  const std::vector<std::int32_t>& leaves = leaves_;
   const auto leaf = [&](std::int32_t index) {
     const Node& node = nodes_[std::size_t(index)];
     std::array<Vec3, 3 * LEAF_TRIANGLES> coefficient;
@@ -426,6 +405,8 @@ std::vector<std::pair<std::int32_t, std::int32_t>> PatchTree::self_pairs(std::sp
     report();
     return out;
   }
+  m.triangle_box.resize(order_.size());
+  m.box.resize(nodes);
   for_leaves(leaf_boxes);
   for (std::size_t i = nodes; i-- > 0;)
     if (nodes_[i].right >= 0) m.box[i] = merged(m.box[i + 1], m.box[std::size_t(nodes_[i].right)]);

@@ -59,7 +59,26 @@ class PatchTree {
     std::int32_t first = 0, count = 0;  // the node's triangles: order_[first, first + count)
     std::int32_t contour_first = 0, contour_count = 0;  // the disk's boundary: contours_[...]; 0 when not a disk
   };
-  struct Motion;  // per-call state: triangle boxes, node boxes and cones
+  // Per-call state: the triangles' boxes (in order_'s order) and each node's box and normal
+  // cone (axis, cosine and sine of the half-angle; cone_ok false when it is not within 90
+  // degrees or holds a degenerate triangle).
+  struct Motion {
+    std::span<const Vec3> start, end;
+    std::vector<Aabb> triangle_box;
+    std::vector<Aabb> box;
+    std::vector<Vec3> sum;  // area-weighted normal coefficients, summed: the cone's axis
+    std::vector<Vec3> axis;
+    std::vector<Scalar> cos, sin;
+    std::vector<char> cone_ok;
+    // Restricted to pairs with a moved triangle (moved vertices given): which triangles (in
+    // order_'s order) and which nodes hold one. Empty: every pair.
+    std::vector<char> triangle_moved, node_moved;
+    bool restricted() const { return !node_moved.empty(); }
+    bool keeps(std::int32_t i, std::int32_t j) const {
+      return !restricted() || triangle_moved[std::size_t(i)] || triangle_moved[std::size_t(j)];
+    }
+    bool holds_moved(std::int32_t node) const { return !restricted() || node_moved[std::size_t(node)]; }
+  };
   struct BuildScratch {
     std::vector<std::array<std::int32_t, 3>> neighbours;  // across each triangle's edges; -1: none
     std::vector<std::int32_t> stamp, position;          // the node a triangle was last in, and where
@@ -81,6 +100,8 @@ class PatchTree {
   std::vector<std::int32_t> order_;     // triangle indices, each leaf's contiguous
   std::vector<std::int32_t> contours_;  // the disks' boundary vertices, counter-clockwise about their normals
   std::vector<Node> nodes_;             // depth first: a node's left child follows it
+  std::vector<std::int32_t> leaves_;    // the leaf nodes
+  Motion motion_;
 };
 
 }  // namespace drape::ccd
