@@ -395,10 +395,7 @@ std::vector<std::pair<std::int32_t, std::int32_t>> PatchTree::self_pairs(std::sp
   }
   SelfCullCounters local;
   const auto report = [&] {
-    if (!counters) return;
-    counters->patches_tested += local.patches_tested;
-    counters->patches_culled += local.patches_culled;
-    counters->triangles_culled += local.triangles_culled;
+    if (counters) *counters += local;
   };
   // A root proven free (a flat or gently curved sheet) needs no boxes at all.
   if (culled(m, 0, local)) {
@@ -442,9 +439,7 @@ std::vector<std::pair<std::int32_t, std::int32_t>> PatchTree::self_pairs(std::sp
     });
     for (std::size_t k = 0; k < tasks.size(); ++k) {
       out.insert(out.end(), found[k].begin(), found[k].end());
-      local.patches_tested += task_counters[k].patches_tested;
-      local.patches_culled += task_counters[k].patches_culled;
-      local.triangles_culled += task_counters[k].triangles_culled;
+      local += task_counters[k];
     }
   }
   std::sort(out.begin(), out.end());

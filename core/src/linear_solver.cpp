@@ -137,14 +137,10 @@ class ConjugateGradientSolver final : public LinearSolver {
 // serial 7.6 s, the same results). No active parallel level makes every region run on the
 // calling thread; set on each thread that calls CHOLMOD, before each call.
 namespace {
-void serial_openmp() {
-  omp_set_num_threads(1);
-  omp_set_max_active_levels(0);
-}
+void serial_openmp() { omp_set_max_active_levels(0); }
 }  // namespace
 
 struct CholmodFactor::Impl {
-  Impl() { serial_openmp(); }
   bool same_pattern(const SparseMatrix& A) const {
     return analyses > 0 && A.rows() == rows && A.nonZeros() == nonzeros &&
            std::equal(A.outerIndexPtr(), A.outerIndexPtr() + A.outerSize() + 1, outer.begin()) &&

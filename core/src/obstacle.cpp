@@ -27,9 +27,6 @@ SurfaceContact analytic_contact(const PosedShape& shape, Scalar t, const Vec3& x
   return out;
 }
 
-SurfaceContact analytic_contact(const Obstacle& obstacle, Scalar t, const Vec3& x) {
-  return analytic_contact(pose_shape(obstacle, t), t, x);
-}
 
 std::vector<Vec3> posed_vertices(const Obstacle& obstacle, Scalar t) {
   std::vector<Vec3> out;

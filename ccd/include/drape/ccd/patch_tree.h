@@ -29,6 +29,12 @@ struct SelfCullCounters {
   long patches_tested = 0;  ///< patches whose cone and contour were tested
   long patches_culled = 0;  ///< of those, proven free of self-contact (their pairs never enumerated)
   long triangles_culled = 0;  ///< triangles inside the culled patches
+  SelfCullCounters& operator+=(const SelfCullCounters& other) {
+    patches_tested += other.patches_tested;
+    patches_culled += other.patches_culled;
+    triangles_culled += other.triangles_culled;
+    return *this;
+  }
 };
 
 class PatchTree {
@@ -50,8 +56,6 @@ class PatchTree {
                                                                 Scalar margin, int threads = 1,
                                                                 SelfCullCounters* counters = nullptr,
                                                                 std::span<const std::uint8_t> moved = {});
-
-  std::size_t node_count() const { return nodes_.size(); }
 
  private:
   struct Node {

@@ -39,9 +39,6 @@ PosedShape pose_shape(const Obstacle& obstacle, Scalar t);
 /// Sphere or plane posed at time t, seen from x.
 SurfaceContact analytic_contact(const PosedShape& shape, Scalar t, const Vec3& x);
 
-/// Sphere or plane at time t, seen from x (posing it for this one point).
-SurfaceContact analytic_contact(const Obstacle& obstacle, Scalar t, const Vec3& x);
-
 /// A vertex at start moving by h * motion over a step ending at t_next (the shape posed at
 /// t_next): when its end lies within depth of the shape's surface, motion is changed so that it
 /// ends at depth along the surface normal, and the contact there is returned.
