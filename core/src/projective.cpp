@@ -166,9 +166,13 @@ bool ProjectiveSolver::solve(const ProjectiveStep& step, std::vector<Vec3>& posi
   contact_impulse_.assign(positions.size(), 0);
   contact_work_ = 0;
   shapes_.clear();
+  active_.clear();
   if (step.contacts && history_ > 0) prepare_contacts(*step.contacts);
   const bool ok = history_ > 0 ? quasi_newton(positions, error) : local_global(positions, error);
-  if (ok && step.contacts && history_ > 0) contact_terms(positions, nullptr, true);
+  if (ok && step.contacts && history_ > 0) {
+    active_reactions(positions, raw_gradient_);
+    contact_terms(positions, nullptr, true);
+  }
   step_ = {};
   return ok;
 }
@@ -358,7 +362,12 @@ bool ProjectiveSolver::quasi_newton(std::vector<Vec3>& positions, std::string& e
   // local-global iteration; the history of steps s and gradient changes t bends it towards
   // the springs' true curvature, which the constant P lacks (slack and compressed springs,
   // the cloth's soft modes). A step is taken whole when it lowers the objective enough
-  // (Armijo), else halved; a direction that does not descend restarts the history.
+  // (Armijo), else shortened; a direction that does not descend restarts the history.
+  // The spheres and planes are constraints (an active set, as in projected gradient
+  // methods): every iterate keeps each free vertex at its gap (keep_out), and the active
+  // vertices' gradients and steps lose their part along the surface's normal, so a resting
+  // cloth's weight is held exactly, not by a penalty that lets it sink (which the response
+  // then undid every step, and its change had to be spread by two more solves).
   const auto dot = [](const Block& a, const Block& b) { return (a.array() * b.array()).sum(); };
   const int memory = history_;
   history_s_.resize(std::size_t(memory));
@@ -366,12 +375,13 @@ bool ProjectiveSolver::quasi_newton(std::vector<Vec3>& positions, std::string& e
   history_rho_.assign(std::size_t(memory), 0);
   std::vector<Scalar> alpha(static_cast<std::size_t>(memory), 0.0);
   int stored = 0, newest = -1;  // the history is a ring
-  const auto leave_out_fixed = [&](Block& rows) {
-    for (int a = 0; a < free_count_; ++a)
-      if (fixed_[std::size_t(a)]) rows.row(a).setZero();
-  };
+  keep_out(positions);
+  activate();
+  refresh_active(positions);
   Scalar objective = evaluate(positions, &gradient_);
-  leave_out_fixed(gradient_);
+  if (release(gradient_)) refresh_active(positions);
+  raw_gradient_ = gradient_;
+  project(gradient_);
   trial_ = positions;
   for (int iteration = 0; iteration < iterations_; ++iteration) {
     // The two-loop recursion: direction = -H g.
@@ -387,7 +397,7 @@ bool ProjectiveSolver::quasi_newton(std::vector<Vec3>& positions, std::string& e
     }
     ++iterations_done_;
     direction_ = solution_;
-    leave_out_fixed(direction_);
+    project(direction_);
     for (int k = stored - 1; k >= 0; --k) {
       const std::size_t i = std::size_t((newest - k + memory) % memory);
       const Scalar beta = history_rho_[i] * dot(history_t_[i], direction_);
@@ -408,8 +418,8 @@ bool ProjectiveSolver::quasi_newton(std::vector<Vec3>& positions, std::string& e
     for (int shortening = 0; shortening < MAX_LINE_SEARCH_STEPS; ++shortening) {
       for (std::size_t v = 0; v < positions.size(); ++v)
         if (const int a = free_index_[v]; a >= 0) trial_[v] = positions[v] + step * Vec3(direction_.row(a).transpose());
+      keep_out(trial_);
       tried = evaluate(trial_, &trial_gradient_);
-      leave_out_fixed(trial_gradient_);
       taken = step;
       if (tried <= objective + ARMIJO * step * slope) break;
       const Scalar curvature = tried - objective - slope * step;  // of the quadratic, times step^2
@@ -417,8 +427,19 @@ bool ProjectiveSolver::quasi_newton(std::vector<Vec3>& positions, std::string& e
       step = std::clamp(minimum, 0.01 * step, 0.5 * step);
     }
     if (!(tried < objective)) break;  // no progress along it: as good as this iteration gets
+    // The active set at the new iterate: the vertices the trial reached a surface with, less
+    // those its gradient pulls off one.
+    bool changed = activate();
+    refresh_active(trial_);
+    if (release(trial_gradient_)) changed = true, refresh_active(trial_);
+    raw_gradient_ = trial_gradient_;
+    project(trial_gradient_);
     // s = the step, t = the gradient's change; kept (over the oldest pair once the history is
-    // full) only when the curvature along s is positive.
+    // full) only when the curvature along s is positive. The pairs are kept when the active
+    // set changes (each pair's vectors lose what the set takes at the next projection):
+    // restarting there, as vertices come and go along a contact's rim, made the solve at
+    // rest little better than local-global (a cloth at rest on a sphere, 2 steps a frame:
+    // 133 energy halvings in 240 steps against 66).
     step_s_ = taken * direction_;
     step_t_ = trial_gradient_ - gradient_;
     const Scalar curvature = dot(step_s_, step_t_);
@@ -435,7 +456,7 @@ bool ProjectiveSolver::quasi_newton(std::vector<Vec3>& positions, std::string& e
     objective = tried;
     // Converged when a whole step moved no vertex by more than the tolerance's share of an
     // edge (a shortened one says nothing about the distance left).
-    if (taken == 1 && direction_.rowwise().norm().maxCoeff() <= converged_move_) break;
+    if (taken == 1 && !changed && direction_.rowwise().norm().maxCoeff() <= converged_move_) break;
   }
   objective_ = objective;
   return true;

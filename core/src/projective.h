@@ -45,11 +45,11 @@ struct FrictionContact {
   Scalar force = 0;  ///< N: friction coefficient times the normal force
 };
 
-/// The contacts held in the solve: the scene's spheres and planes kept away from every free
-/// vertex at the step's end by as much as the vertex was at its start, at most the margin (a
-/// held contact yields a little: within the margin, outside the thickness, where the response
-/// has nothing to do); the mesh obstacles' contacts of the step's start,
-/// whose cloth points may not approach their obstacle faster than its surface; friction.
+/// The contacts held in the solve: the scene's spheres and planes as constraints (each free
+/// vertex kept at the step's end as far from each as it was at the step's start, at most the
+/// margin: outside the thickness, where the response has nothing to do); the mesh obstacles'
+/// contacts of the step's start, whose cloth points may not approach their obstacle faster
+/// than its surface (a penalty); friction.
 struct ProjectiveContacts {
   bool analytic = false;  ///< hold the spheres and planes
   Scalar t_end = 0;       ///< s: where they are
@@ -124,21 +124,42 @@ class ProjectiveSolver {
   // The step's contacts made ready: weights, the shapes posed, the gaps kept, the mesh
   // contacts' bounds (projective_contacts.cpp).
   void prepare_contacts(const ProjectiveContacts& contacts);
-  // The held contacts' part of the objective at x, their gradient added to gradient when
-  // given; with impulses, each vertex's normal impulse into contact_impulse_ and the work into
-  // contact_work_.
+  // The mesh contacts' and friction's part of the objective at x, their gradient added to
+  // gradient when given; with impulses, each vertex's normal impulse into contact_impulse_ and
+  // the work into contact_work_.
   Scalar contact_terms(const std::vector<Vec3>& x, std::vector<Vec3>* gradient, bool impulses);
+  // The spheres and planes as constraints on L-BFGS's iterates (an active set): every free
+  // vertex kept at its gap from each, an active vertex's steps along the surface only.
+  // keep_out moves the vertices of x that are closer than their gap out to it and lists them
+  // in entered_; activate makes those active; refresh_active takes the active vertices'
+  // normals at x; release frees the active vertices whose gradient (raw, not yet projected)
+  // pulls them off the surface; project removes from rows (per free vertex) what the held
+  // and active vertices may not do. activate and release say whether the set changed.
+  void keep_out(std::vector<Vec3>& x);
+  bool activate();
+  void refresh_active(const std::vector<Vec3>& x);
+  bool release(const Block& gradient);
+  void project(Block& rows) const;
+  // After the solve: the active vertices' normal impulses (their reaction, from the raw
+  // gradient at the result) and their work at moving obstacles' velocities.
+  void active_reactions(const std::vector<Vec3>& x, const Block& gradient);
   // The step's iterations from positions (first guess in, result out): plain local-global
   // with Chebyshev acceleration, or L-BFGS.
   bool local_global(std::vector<Vec3>& positions, std::string& error);
   bool quasi_newton(std::vector<Vec3>& positions, std::string& error);
-  // A held contact's weight in the objective, per kilogram of its vertex (the heaviest of its
-  // vertices): stiff against the vertex's inertia (a resting vertex yields g h^2 / 10 a step,
-  // within the margin), soft against its springs. The run's matrix knows a cloth's collective
+  // A mesh contact's penalty weight in the objective, per kilogram of its vertex (the heaviest
+  // of its vertices), also the bound on friction's stiffness while sticking: stiff against the
+  // vertex's inertia (a resting vertex yields g h^2 / 10 a step, within the margin), soft
+  // against its springs. The run's matrix knows a cloth's collective
   // motions (a whole sheet pressed onto a plane) only by their masses; a weight of the springs'
   // order there made L-BFGS's first steps thousands of times too long and its normal forces,
   // hence friction, wrong.
   static constexpr Scalar CONTACT_HOLD = 10;
+  // Friction's stiffness while sticking, per kilogram of its vertex, at most: a cloth held
+  // on a 20 degree incline by friction 0.5 creeps 0.52 mm in a second at 30 (1.5 mm at 10,
+  // the mesh contacts' weight, which was enough while the response's friction stopped what
+  // the solve's penalty let sink), within 0.5 mm from 100 on, with the same iterations.
+  static constexpr Scalar FRICTION_HOLD = 100;
   static constexpr Scalar ARMIJO = 1e-4;            // sufficient decrease, a fraction of the slope
   static constexpr int MAX_LINE_SEARCH_STEPS = 10;
   // What the step being solved uses (set by solve for its iterations).
@@ -174,7 +195,8 @@ class ProjectiveSolver {
   std::vector<Vec3> spring_start_;      // per spring: x_i - x_j at the step's start
   std::vector<Vec3> spring_direction_;  // and its direction (any, for a spring of zero length)
   Block rhs_, solution_;
-  Block gradient_, trial_gradient_, direction_;  // L-BFGS, over the free vertices
+  Block gradient_, trial_gradient_, direction_;  // L-BFGS, over the free vertices (gradients projected)
+  Block raw_gradient_;                           // the last iterate's gradient before projecting
   std::vector<Vec3> gradient_rows_;
   // L-BFGS's parallel evaluation: each spring's pull on its end i and its energy, each
   // vertex's energy, and each free vertex's springs (2 k for spring k's end i, 2 k + 1 for j).
@@ -191,10 +213,19 @@ class ProjectiveSolver {
   std::vector<Scalar> history_rho_;
   std::vector<Vec3> trial_;                               // every vertex: the line search's point
   std::vector<Scalar> contact_bound_, contact_stiffness_;  // per mesh contact: n . sum w x at least this; its weight
-  std::vector<Scalar> vertex_stiffness_;                   // per free vertex: the analytic obstacles' weight
+  std::vector<Scalar> vertex_stiffness_;                   // per free vertex: a mesh contact's weight
   std::vector<Scalar> contact_impulse_;                    // per vertex, N s
   std::vector<PosedShape> shapes_;  // empty unless the step holds analytic contacts
   std::vector<Scalar> kept_gap_;    // per shape and free vertex (shape-major): the gap the solve keeps
+  struct ActiveContact {
+    int vertex = 0;  // global index (a free vertex)
+    int shape = 0;   // in shapes_
+    Vec3 normal = Vec3::UnitZ();  // the surface's at the vertex
+    Vec3 basis = Vec3::UnitZ();   // normal less the vertex's earlier active normals (Gram-Schmidt), unit or zero
+  };
+  std::vector<ActiveContact> active_;  // by vertex
+  std::vector<char> is_active_;        // per shape and free vertex (shape-major)
+  std::vector<std::pair<int, int>> entered_;  // (vertex, shape) moved out by the last keep_out
   Scalar contact_work_ = 0;
 };
 

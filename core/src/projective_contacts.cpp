@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <tuple>
 
 #include "drape/core/obstacle.h"
 
@@ -34,6 +35,8 @@ void ProjectiveSolver::prepare_contacts(const ProjectiveContacts& c) {
       if (const int a = free_index_[v]; a >= 0)
         kept_gap_[k * std::size_t(free_count_) + std::size_t(a)] = std::min(at_start.distance(x0[v]).first, c.margin);
   }
+  active_.clear();
+  is_active_.assign(shapes_.size() * std::size_t(free_count_), 0);
   contact_bound_.resize(c.mesh.size());
   contact_stiffness_.resize(c.mesh.size());
   for (std::size_t k = 0; k < c.mesh.size(); ++k) {
@@ -55,29 +58,8 @@ Scalar ProjectiveSolver::contact_terms(const std::vector<Vec3>& x, std::vector<V
   const Scalar h = step_.step->h;
   const std::vector<Vec3>& x0 = *step_.step->start;
   Scalar total = 0;
-  // The spheres and planes (posed at the step's end): a one-sided quadratic on each free
-  // vertex's depth within the thickness (continuous in its gradient, as L-BFGS needs).
-  for (std::size_t k = 0; k < shapes_.size(); ++k) {
-    const PosedShape& shape = shapes_[k];
-    const Scalar* kept_gap = kept_gap_.data() + k * std::size_t(free_count_);
-    for (std::size_t v = 0; v < x.size(); ++v) {
-      const int a = free_index_[v];
-      if (a < 0) continue;
-      const auto [distance, normal] = shape.distance(x[v]);
-      const Scalar depth = kept_gap[a] - distance;
-      if (!(depth > 0)) continue;
-      const Scalar stiffness = vertex_stiffness_[std::size_t(a)];
-      total += 0.5 * stiffness * depth * depth;
-      if (gradient) (*gradient)[std::size_t(a)] -= stiffness * depth * normal;
-      if (impulses) {
-        const Scalar impulse = stiffness * depth / h;  // the term's force is its gradient over h^2
-        contact_impulse_[v] += impulse;
-        if (shape.obstacle->spec.motion.moves())
-          contact_work_ += impulse * normal.dot(analytic_contact(shape, c->t_end, x[v]).surface_velocity);
-      }
-    }
-  }
-  // The mesh contacts: the same on how far their cloth points fall short of their bound.
+  // The mesh contacts: a one-sided quadratic on how far their cloth points fall short of
+  // their bound (continuous in its gradient, as L-BFGS needs).
   for (std::size_t k = 0; k < c->mesh.size(); ++k) {
     const SolveContact& contact = c->mesh[k];
     Scalar reached = 0;
@@ -98,13 +80,13 @@ Scalar ProjectiveSolver::contact_terms(const std::vector<Vec3>& x, std::vector<V
   // speed (the lagged friction potential of Li et al., "Incremental potential contact", 2020,
   // section 5): h^2 F f0(|u|) with f0(y) = y beyond eps h and -y^3 / (3 eps^2 h^2) + y^2 /
   // (eps h) + eps h / 3 below it. Its stiffness while sticking, 2 h F / eps, is kept within
-  // the vertex's contact weight (a larger eps h: a creep of at most 2 h^2 F over that weight
-  // a step), or L-BFGS, whose first inverse Hessian lacks it, would stall.
+  // FRICTION_HOLD times the vertex's mass (a larger eps h: a creep of at most 2 h^2 F over
+  // that a step), or L-BFGS, whose first inverse Hessian lacks it, would stall.
   for (const FrictionContact& f : c->friction) {
     const std::size_t v = std::size_t(f.vertex);
     const int a = free_index_[v];
     if (a < 0) continue;
-    const Scalar eps_h = std::max(c->slip * h, 2 * h * h * f.force / vertex_stiffness_[std::size_t(a)]);
+    const Scalar eps_h = std::max(c->slip * h, 2 * h * h * f.force / (FRICTION_HOLD * model_.masses[v]));
     const Vec3 moved = x[v] - x0[v] - h * f.surface_velocity;
     const Vec3 u = moved - moved.dot(f.normal) * f.normal;
     const Scalar y = u.norm();
@@ -116,6 +98,86 @@ Scalar ProjectiveSolver::contact_terms(const std::vector<Vec3>& x, std::vector<V
   }
   if (impulses) contact_work_ = std::max<Scalar>(0, contact_work_);
   return total;
+}
+
+void ProjectiveSolver::keep_out(std::vector<Vec3>& x) {
+  entered_.clear();
+  for (std::size_t k = 0; k < shapes_.size(); ++k) {
+    const Scalar* kept_gap = kept_gap_.data() + k * std::size_t(free_count_);
+    for (std::size_t v = 0; v < x.size(); ++v) {
+      const int a = free_index_[v];
+      if (a < 0 || fixed_[std::size_t(a)]) continue;
+      const auto [distance, normal] = shapes_[k].distance(x[v]);
+      if (!(distance < kept_gap[a])) continue;
+      x[v] += (kept_gap[a] - distance) * normal;
+      entered_.emplace_back(int(v), int(k));
+    }
+  }
+}
+
+bool ProjectiveSolver::activate() {
+  bool changed = false;
+  for (const auto& [v, k] : entered_) {
+    char& flag = is_active_[std::size_t(k) * std::size_t(free_count_) + std::size_t(free_index_[std::size_t(v)])];
+    if (flag) continue;
+    flag = 1;
+    active_.push_back({v, k});
+    changed = true;
+  }
+  if (changed)
+    std::sort(active_.begin(), active_.end(),
+              [](const ActiveContact& a, const ActiveContact& b) { return std::tie(a.vertex, a.shape) < std::tie(b.vertex, b.shape); });
+  return changed;
+}
+
+void ProjectiveSolver::refresh_active(const std::vector<Vec3>& x) {
+  for (std::size_t e = 0; e < active_.size(); ++e) {
+    ActiveContact& c = active_[e];
+    c.normal = shapes_[std::size_t(c.shape)].distance(x[std::size_t(c.vertex)]).second;
+    // A vertex against two or three surfaces at once (a sphere resting on a plane's corner):
+    // its later normals less the earlier ones.
+    c.basis = c.normal;
+    for (std::size_t f = e; f > 0 && active_[f - 1].vertex == c.vertex; --f) c.basis -= c.basis.dot(active_[f - 1].basis) * active_[f - 1].basis;
+    const Scalar length = c.basis.norm();
+    c.basis = length > 1e-9 ? Vec3(c.basis / length) : Vec3::Zero();
+  }
+}
+
+bool ProjectiveSolver::release(const Block& gradient) {
+  // Descent (-gradient) leads off the surface: the constraint's reaction would be a pull.
+  const auto freed = [&](const ActiveContact& c) {
+    if (!(gradient.row(free_index_[std::size_t(c.vertex)]).dot(c.normal.transpose()) < 0)) return false;
+    is_active_[std::size_t(c.shape) * std::size_t(free_count_) + std::size_t(free_index_[std::size_t(c.vertex)])] = 0;
+    return true;
+  };
+  const std::size_t before = active_.size();
+  active_.erase(std::remove_if(active_.begin(), active_.end(), freed), active_.end());
+  return active_.size() != before;
+}
+
+void ProjectiveSolver::project(Block& rows) const {
+  for (int a = 0; a < free_count_; ++a)
+    if (fixed_[std::size_t(a)]) rows.row(a).setZero();
+  for (const ActiveContact& c : active_) {
+    const int a = free_index_[std::size_t(c.vertex)];
+    rows.row(a) -= rows.row(a).dot(c.basis.transpose()) * c.basis.transpose();
+  }
+}
+
+void ProjectiveSolver::active_reactions(const std::vector<Vec3>& x, const Block& gradient) {
+  const Scalar h = step_.step->h;
+  const ProjectiveContacts& c = *step_.step->contacts;
+  for (const ActiveContact& contact : active_) {
+    // The constraint balances the gradient's part along its basis (the objective's force is
+    // minus its gradient over h^2; an impulse is h times a force).
+    const Scalar reaction = gradient.row(free_index_[std::size_t(contact.vertex)]).dot(contact.basis.transpose());
+    if (!(reaction > 0)) continue;
+    const Scalar impulse = reaction / h;
+    contact_impulse_[std::size_t(contact.vertex)] += impulse;
+    const PosedShape& shape = shapes_[std::size_t(contact.shape)];
+    if (shape.obstacle->spec.motion.moves())
+      contact_work_ += impulse * contact.normal.dot(analytic_contact(shape, c.t_end, x[std::size_t(contact.vertex)]).surface_velocity);
+  }
 }
 
 }  // namespace drape

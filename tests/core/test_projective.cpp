@@ -187,6 +187,25 @@ TEST(Projective, AClothLandingOnASphereStaysOutsideItAndAtRest) {
   EXPECT_LT(max_stretch(model, state), 1.05);
 }
 
+TEST(Projective, TheSolveHoldsARestingClothOnASphereAndTheResponseHasNothingToDo) {
+  // The spheres and planes are constraints of L-BFGS's iterates: at rest (after 1.2 s) every
+  // step is one solve and no vertex ends within the thickness (the response moves none).
+  const Model model = model_of(R"({"frame_time": 0.04, "frame_steps": 8, "frames": 40,
+    "cloths": [{"grid": {"size": [1, 1], "resolution": [16, 16]}, "transform": {"translate": [0, 0, 1.1]}}],
+    "obstacles": [{"sphere": {"center": [0, 0, 0.5], "radius": 0.5}}, {"plane": {"point": [0, 0, 0], "normal": [0, 0, 1]}}],
+    "solver": {"type": "projective"}})");
+  State state = initial_state(model);
+  Integrator integrator(model);
+  for (int k = 0; k < 8 * 30; ++k) ASSERT_TRUE(integrator.step(state).ok);
+  for (int k = 0; k < 8 * 10; ++k) {
+    const StepReport r = integrator.step(state);
+    ASSERT_TRUE(r.ok) << r.failure;
+    EXPECT_LE(r.solver_iterations, model.scene.solver.iterations) << "step " << k;
+    EXPECT_EQ(r.obstacle_contacts, 0) << "step " << k;
+    for (const Vec3& x : state.positions) EXPECT_GE((x - Vec3(0, 0, 0.5)).norm() - 0.5, 0.005 - 1e-12);
+  }
+}
+
 TEST(Projective, TheSameBitsForAnyThreadCount) {
   // L-BFGS's passes over springs and vertices run in parallel (several blocks of springs
   // here): one, two and three threads give the same positions to the last bit.
