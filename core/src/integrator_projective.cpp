@@ -34,12 +34,16 @@ bool Integrator::solve_projective(State& state, const std::vector<Vec3>& pinned_
         if (m.pin_of_vertex[std::size_t(hinge.v[i])] >= 0)
           w.forces[std::size_t(hinge.v[i])] += hinge_force(hinge, i, state.positions, state.velocities);
     }
-  // First guess: the inertial prediction y (the free vertices), the prescribed end (the pinned
-  // ones); in free fall it is the answer, which the acceleration then keeps.
+  // First guess: each free vertex's end without its springs, the inertial prediction y slowed
+  // by the air's damping towards the wind, (y + h a (x0 + h w)) / (1 + h a); the prescribed
+  // end for the pinned ones. In free fall it is the answer, found before any back-substitution.
   std::vector<Vec3> positions(n);
-  for (std::size_t v = 0; v < n; ++v)
-    positions[v] = state.positions[v] + h * (state.velocities[v] + pinned_dv[v]) +
-                   (w.free_index[v] >= 0 ? Vec3(h * h / m.masses[v] * w.explicit_forces[v]) : Vec3::Zero());
+  for (std::size_t v = 0; v < n; ++v) {
+    positions[v] = state.positions[v] + h * (state.velocities[v] + pinned_dv[v]);
+    if (w.free_index[v] < 0) continue;
+    const Scalar air = h * m.air_damping[v];
+    positions[v] = (positions[v] + h * h / m.masses[v] * w.explicit_forces[v] + air * (state.positions[v] + h * air_velocity)) / (1 + air);
+  }
   // The contacts held in the solve (L-BFGS only): the analytic obstacles at the step's end,
   // the mesh contacts of its start, and friction from the normal forces of the step before.
   ProjectiveContacts& contacts = w.projective_contacts;

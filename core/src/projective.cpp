@@ -29,8 +29,10 @@ ProjectiveSolver::ProjectiveSolver(const Model& model, std::vector<int> free_ind
       iterations_(model.scene.solver.iterations),
       history_(model.scene.solver.history),
       rho_(model.scene.solver.chebyshev),
-      converged_move_(model.scene.solver.tolerance * mean_edge(model)),
+      converged_move_(std::max(model.scene.solver.tolerance, ROUNDING_MOVE) * mean_edge(model)),
       arena_(std::make_unique<tbb::task_arena>(std::max(1, threads))) {
+  for (std::size_t v = 0; v < model.masses.size(); ++v)
+    if (free_index_[v] >= 0) least_mass_ = std::min(least_mass_, model.masses[v]);
   base_.assign(std::size_t(free_count_), Vec3::Zero());
   sums_ = base_;
   predicted_ = base_;
@@ -191,8 +193,9 @@ Scalar ProjectiveSolver::evaluate(const std::vector<Vec3>& x, Block* gradient) {
     const SpringTerm& s = sys.springs[k];
     const Vec3 z = x[std::size_t(s.i)] - x[std::size_t(s.j)];
     const Scalar length = z.norm();
-    // A spring of zero length has no direction: its start's, or any.
-    const Vec3 d = length > 0 ? Vec3(z / length) : spring_direction_[k];
+    // A spring of zero length has no direction: its start's, or any. (One division, not
+    // three: the loop waited on them.)
+    const Vec3 d = length > 0 ? Vec3(z * (1 / length)) : spring_direction_[k];
     // The damping acts along the spring's direction at the step's start (as the reference
     // solver's does): q is z's projection onto a fixed plane, so the iteration never raises
     // the objective.
@@ -384,6 +387,11 @@ bool ProjectiveSolver::quasi_newton(std::vector<Vec3>& positions, std::string& e
   project(gradient_);
   trial_ = positions;
   for (int iteration = 0; iteration < iterations_; ++iteration) {
+    // Converged before the back-substitution when no vertex could move farther than the
+    // tolerance: P >= M, so the step d = P^-1 g has |d|_M^2 <= g^T P^-1 g <= g^T M^-1 g, and
+    // no vertex moves farther than sqrt(g^T M^-1 g / least mass) (a free fall's first guess
+    // is its answer: no back-substitution at all).
+    if (inverse_mass_norm(gradient_) <= converged_move_ * converged_move_ * least_mass_) break;
     // The two-loop recursion: direction = -H g.
     direction_ = gradient_;
     for (int k = 0; k < stored; ++k) {
@@ -460,6 +468,13 @@ bool ProjectiveSolver::quasi_newton(std::vector<Vec3>& positions, std::string& e
   }
   objective_ = objective;
   return true;
+}
+
+Scalar ProjectiveSolver::inverse_mass_norm(const Block& rows) const {
+  Scalar sum = 0;
+  for (std::size_t v = 0; v < free_index_.size(); ++v)
+    if (const int a = free_index_[v]; a >= 0) sum += rows.row(a).squaredNorm() / model_.masses[v];
+  return sum;
 }
 
 int ProjectiveSolver::analyses() const {

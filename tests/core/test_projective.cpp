@@ -164,16 +164,18 @@ TEST(Projective, EnergyStaysBelowItsStartWithoutInputWhenConverged) {
 }
 
 TEST(Projective, AClothLandingOnASphereStaysOutsideItAndAtRest) {
-  // 2.4 s: it lands at about 0.2 s and settles, swaying (kinetic energy about 1e-3 J at 1.2 s,
-  // 3e-5 J at 2.4 s).
-  const Model model = model_of(R"({"frame_time": 0.04, "frame_steps": 8, "frames": 60,
+  // 3.6 s: it lands at about 0.2 s and settles, swaying; its kinetic energy falls unevenly
+  // (2-6x up and down from frame to frame: 9e-5 J at 1.6 s, 1.9e-4 J at 2 s, 1.1e-4 J at 2.4 s,
+  // 1.9e-5 J at 3.6 s; a first guess without the air's damping gave 6e-4, 1e-4, 4.6e-5 and
+  // 1.7e-5 J), so it is checked after 3.6 s, not 2.4 s.
+  const Model model = model_of(R"({"frame_time": 0.04, "frame_steps": 8, "frames": 90,
     "cloths": [{"grid": {"size": [1, 1], "resolution": [16, 16]}, "transform": {"translate": [0, 0, 1.1]}}],
     "obstacles": [{"sphere": {"center": [0, 0, 0.5], "radius": 0.5}}, {"plane": {"point": [0, 0, 0], "normal": [0, 0, 1]}}],
     "solver": {"type": "projective"}})");
   State state = initial_state(model);
   Integrator integrator(model);
   const Scalar start = kinetic_energy(model, state) + potential_energy(model, state);
-  for (int k = 0; k < 8 * 60; ++k) {
+  for (int k = 0; k < 8 * 90; ++k) {
     const StepReport r = integrator.step(state);
     ASSERT_TRUE(r.ok) << r.failure;
     EXPECT_LE(kinetic_energy(model, state) + potential_energy(model, state), start) << "step " << k;
