@@ -301,4 +301,16 @@ Candidates feature_pairs(std::span<const TriangleIndices> triangles_a, std::span
   return features_of(triangles_a, triangles_b, pairs, &owners_a, &owners_b, vertex_volumes, threads, moved);
 }
 
+void keep_overlapping(Candidates& tests, std::span<const FeatureVolume> vertex_volumes) {
+  const auto merged = [&](std::span<const std::int32_t> vertices) {
+    FeatureVolume volume = vertex_volumes[std::size_t(vertices[0])];
+    for (std::size_t k = 1; k < vertices.size(); ++k) volume.merge(vertex_volumes[std::size_t(vertices[k])]);
+    return volume;
+  };
+  std::erase_if(tests.vertex_face, [&](const VertexFacePair& t) {
+    return !overlap(vertex_volumes[std::size_t(t.vertex)], merged(t.face));
+  });
+  std::erase_if(tests.edge_edge, [&](const EdgeEdgePair& t) { return !overlap(merged(t.edge_a), merged(t.edge_b)); });
+}
+
 }  // namespace drape::ccd

@@ -7,6 +7,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <initializer_list>
 #include <numeric>
 #include <tuple>
 
@@ -80,6 +81,68 @@ PatchTree::PatchTree(std::span<const TriangleIndices> triangles, std::span<const
   build(all, scratch, reference);
   for (std::size_t i = 0; i < nodes_.size(); ++i)
     if (nodes_[i].right < 0) leaves_.push_back(std::int32_t(i));
+  build_orphans();
+}
+
+void PatchTree::build_orphans() {
+  const std::size_t nodes = nodes_.size();
+  // Each triangle's leaf, and each node's parent and depth (a left child follows its parent).
+  std::vector<std::int32_t> parent(nodes, -1), depth(nodes, 0), leaf_of(triangles_.size(), 0);
+  for (std::size_t i = 0; i < nodes; ++i) {
+    const Node& node = nodes_[i];
+    if (node.right < 0) {
+      for (std::int32_t k = node.first; k < node.first + node.count; ++k) leaf_of[std::size_t(order_[std::size_t(k)])] = std::int32_t(i);
+      continue;
+    }
+    for (std::size_t child : {i + 1, std::size_t(node.right)}) parent[child] = std::int32_t(i), depth[child] = depth[i] + 1;
+  }
+  const auto common = [&](std::int32_t a, std::int32_t b) {
+    while (depth[std::size_t(a)] > depth[std::size_t(b)]) a = parent[std::size_t(a)];
+    while (depth[std::size_t(b)] > depth[std::size_t(a)]) b = parent[std::size_t(b)];
+    while (a != b) a = parent[std::size_t(a)], b = parent[std::size_t(b)];
+    return a;
+  };
+  // The pairs of triangles sharing a vertex, once each (i < j), by their lowest common node.
+  std::int32_t highest = -1;
+  for (const TriangleIndices& t : triangles_) highest = std::max({highest, t[0], t[1], t[2]});
+  std::vector<std::vector<std::int32_t>> around(std::size_t(highest) + 1);
+  for (std::size_t t = 0; t < triangles_.size(); ++t)
+    for (std::int32_t v : triangles_[t]) around[std::size_t(v)].push_back(std::int32_t(t));
+  std::vector<std::tuple<std::int32_t, std::int32_t, std::int32_t>> adjacent;  // (node, i, j)
+  for (std::size_t t = 0; t < triangles_.size(); ++t) {
+    std::vector<std::int32_t> others;
+    for (std::int32_t v : triangles_[t])
+      for (std::int32_t u : around[std::size_t(v)])
+        if (u > std::int32_t(t)) others.push_back(u);
+    std::sort(others.begin(), others.end());
+    others.erase(std::unique(others.begin(), others.end()), others.end());
+    for (std::int32_t u : others) adjacent.emplace_back(common(leaf_of[t], leaf_of[std::size_t(u)]), std::int32_t(t), u);
+  }
+  std::sort(adjacent.begin(), adjacent.end());
+  // Their tests, node by node, as feature_pairs' owned overload makes them.
+  const FeatureOwners owners = feature_owners(triangles_);
+  orphan_vf_start_.assign(nodes + 1, 0);
+  orphan_ee_start_.assign(nodes + 1, 0);
+  std::vector<std::pair<std::int32_t, std::int32_t>> pairs;
+  for (std::size_t k = 0, node = 0; node < nodes; ++node) {
+    pairs.clear();
+    for (; k < adjacent.size() && std::size_t(std::get<0>(adjacent[k])) == node; ++k)
+      pairs.emplace_back(std::get<1>(adjacent[k]), std::get<2>(adjacent[k]));
+    if (!pairs.empty()) {
+      const Candidates tests = feature_pairs(triangles_, triangles_, pairs, owners, owners);
+      orphan_vf_.insert(orphan_vf_.end(), tests.vertex_face.begin(), tests.vertex_face.end());
+      orphan_ee_.insert(orphan_ee_.end(), tests.edge_edge.begin(), tests.edge_edge.end());
+    }
+    orphan_vf_start_[node + 1] = std::int32_t(orphan_vf_.size());
+    orphan_ee_start_[node + 1] = std::int32_t(orphan_ee_.size());
+  }
+}
+
+bool PatchTree::adjacent(std::int32_t i, std::int32_t j) const {
+  const TriangleIndices &a = triangles_[std::size_t(order_[std::size_t(i)])], &b = triangles_[std::size_t(order_[std::size_t(j)])];
+  for (std::int32_t v : a)
+    if (v == b[0] || v == b[1] || v == b[2]) return true;
+  return false;
 }
 
 std::int32_t PatchTree::build(std::vector<std::int32_t>& set, BuildScratch& scratch, std::span<const Vec3> reference) {
@@ -242,10 +305,12 @@ void PatchTree::self(const Motion& m, std::int32_t index, Pairs& out, SelfCullCo
 
 void PatchTree::own(const Motion& m, std::int32_t index, Pairs& out, SelfCullCounters& counters) const {
   const Node& node = nodes_[std::size_t(index)];
+  if (m.skip_adjacent) m.reached[std::size_t(index)] = 1;
   if (node.right < 0) {
     for (std::int32_t i = node.first; i < node.first + node.count; ++i)
       for (std::int32_t j = i + 1; j < node.first + node.count; ++j)
-        if (m.keeps(i, j) && overlap(m.triangle_box[std::size_t(i)], m.triangle_box[std::size_t(j)]))
+        if (m.keeps(i, j) && overlap(m.triangle_box[std::size_t(i)], m.triangle_box[std::size_t(j)]) &&
+            !(m.skip_adjacent && adjacent(i, j)))
           out.emplace_back(std::minmax(order_[std::size_t(i)], order_[std::size_t(j)]));
     return;
   }
@@ -260,7 +325,8 @@ void PatchTree::across(const Motion& m, std::int32_t a, std::int32_t b, Pairs& o
   if (na.right < 0 && nb.right < 0) {
     for (std::int32_t i = na.first; i < na.first + na.count; ++i)
       for (std::int32_t j = nb.first; j < nb.first + nb.count; ++j)
-        if (m.keeps(i, j) && overlap(m.triangle_box[std::size_t(i)], m.triangle_box[std::size_t(j)]))
+        if (m.keeps(i, j) && overlap(m.triangle_box[std::size_t(i)], m.triangle_box[std::size_t(j)]) &&
+            !(m.skip_adjacent && adjacent(i, j)))
           out.emplace_back(std::minmax(order_[std::size_t(i)], order_[std::size_t(j)]));
     return;
   }
@@ -276,12 +342,16 @@ void PatchTree::across(const Motion& m, std::int32_t a, std::int32_t b, Pairs& o
 std::vector<std::pair<std::int32_t, std::int32_t>> PatchTree::self_pairs(std::span<const Vec3> start,
                                                                          std::span<const Vec3> end, Scalar margin,
                                                                          int threads, SelfCullCounters* counters,
-                                                                         std::span<const std::uint8_t> moved) {
+                                                                         std::span<const std::uint8_t> moved,
+                                                                         Candidates* orphans) {
   Pairs out;
+  if (orphans) *orphans = {};
   if (nodes_.empty()) return out;
   Motion& m = motion_;  // kept between calls: its arrays keep their size
   m.start = start;
   m.end = end;
+  m.skip_adjacent = orphans != nullptr;
+  if (orphans) m.reached.assign(nodes_.size(), 0);
   m.triangle_moved.clear();
   m.node_moved.clear();
   const std::size_t nodes = nodes_.size();
@@ -423,6 +493,7 @@ std::vector<std::pair<std::int32_t, std::int32_t>> PatchTree::self_pairs(std::sp
         tasks.push_back({index, -1});
         return;
       }
+      if (m.skip_adjacent) m.reached[std::size_t(index)] = 1;
       split(split, index + 1);
       split(split, node.right);
       tasks.push_back({index + 1, node.right});
@@ -443,6 +514,26 @@ std::vector<std::pair<std::int32_t, std::int32_t>> PatchTree::self_pairs(std::sp
     }
   }
   std::sort(out.begin(), out.end());
+  if (orphans) {
+    // The reached nodes' orphans, in node order, those with a moved vertex when restricted.
+    const auto any_moved = [&](std::initializer_list<std::int32_t> vertices) {
+      if (moved.empty()) return true;
+      for (std::int32_t v : vertices)
+        if (moved[std::size_t(v)]) return true;
+      return false;
+    };
+    for (std::size_t node = 0; node < nodes; ++node) {
+      if (!m.reached[node]) continue;
+      for (std::int32_t k = orphan_vf_start_[node]; k < orphan_vf_start_[node + 1]; ++k) {
+        const VertexFacePair& t = orphan_vf_[std::size_t(k)];
+        if (any_moved({t.vertex, t.face[0], t.face[1], t.face[2]})) orphans->vertex_face.push_back(t);
+      }
+      for (std::int32_t k = orphan_ee_start_[node]; k < orphan_ee_start_[node + 1]; ++k) {
+        const EdgeEdgePair& t = orphan_ee_[std::size_t(k)];
+        if (any_moved({t.edge_a[0], t.edge_a[1], t.edge_b[0], t.edge_b[1]})) orphans->edge_edge.push_back(t);
+      }
+    }
+  }
   report();
   return out;
 }

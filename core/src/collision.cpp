@@ -97,15 +97,17 @@ ccd::Candidates CollisionPipeline::Impl::candidates(Scalar margin, CollisionCoun
     cloth_tree.update(boxes);
   }
   bool features_ready = false;
+  const auto make_features = [&] {
+    if (features_ready) return;
+    if (model.scene.collisions.feature_boxes) features = ccd::vertex_volumes(start, end, margin);
+    else features.clear();
+    features_ready = true;
+  };
   const auto append = [&](std::span<const ccd::TriangleIndices> other, const ccd::FeatureOwners& other_owners,
                           const std::vector<std::pair<std::int32_t, std::int32_t>>& pairs) {
     counters.bvh_pairs += long(pairs.size());
     if (pairs.empty()) return;
-    if (!features_ready) {
-      if (model.scene.collisions.feature_boxes) features = ccd::vertex_volumes(start, end, margin);
-      else features.clear();
-      features_ready = true;
-    }
+    make_features();
     // Each test once by its features' triangles; without feature volumes (the paper's count,
     // every test of every overlapping pair), every pair's tests, sorted and made unique.
     ccd::Candidates c =
@@ -116,9 +118,20 @@ ccd::Candidates CollisionPipeline::Impl::candidates(Scalar margin, CollisionCoun
     all.edge_edge.insert(all.edge_edge.end(), c.edge_edge.begin(), c.edge_edge.end());
   };
   if (culling) {
+    // With feature volumes (each test once by its owners), the pairs of triangles sharing a
+    // vertex are never listed: their tests come from the tree's orphan sets.
     ccd::SelfCullCounters culled;
-    append(cloth_triangles, cloth_owners, patch_tree.self_pairs(start, end, margin, settings.threads, &culled, moved));
+    ccd::Candidates orphans;
+    const bool owned = model.scene.collisions.feature_boxes;
+    append(cloth_triangles, cloth_owners,
+           patch_tree.self_pairs(start, end, margin, settings.threads, &culled, moved, owned ? &orphans : nullptr));
     counters.culled_triangles += culled.triangles_culled;
+    if (!orphans.vertex_face.empty() || !orphans.edge_edge.empty()) {
+      make_features();
+      ccd::keep_overlapping(orphans, features);
+      all.vertex_face.insert(all.vertex_face.end(), orphans.vertex_face.begin(), orphans.vertex_face.end());
+      all.edge_edge.insert(all.edge_edge.end(), orphans.edge_edge.begin(), orphans.edge_edge.end());
+    }
   } else if (self_pairs) {
     append(cloth_triangles, cloth_owners, cloth_tree.self_pairs());
   }

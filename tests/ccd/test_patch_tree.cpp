@@ -437,3 +437,66 @@ TEST(PatchTree, OwnedFeaturesAcrossTwoMeshesWithDuplicatedFaces) {
     }
   }
 }
+
+namespace {
+
+// Tests as sortable keys: (vertex, face) and (edge, edge).
+std::vector<std::array<std::int32_t, 5>> keys(const Candidates& c) {
+  std::vector<std::array<std::int32_t, 5>> out;
+  for (const auto& t : c.vertex_face) out.push_back({0, t.vertex, t.face[0], t.face[1], t.face[2]});
+  for (const auto& t : c.edge_edge) out.push_back({1, t.edge_a[0], t.edge_a[1], t.edge_b[0], t.edge_b[1]});
+  std::sort(out.begin(), out.end());
+  return out;
+}
+
+}  // namespace
+
+TEST(PatchTree, OrphanSetsGiveTheTestsOfAdjacentPairsWithoutListingThem) {
+  // With orphans, no listed pair shares a vertex, and the listed pairs' owned tests plus the
+  // orphans kept by their volumes are exactly the owned tests of the pairs listed without
+  // orphans: on crumpled sheets, on a large wavy one culled in parts (parallel tasks at 2
+  // threads), with and without moved vertices.
+  std::mt19937_64 rng(5);
+  std::normal_distribution<Scalar> wobble(0, 1);
+  // 48 x 48, gently waved but crumpled where u < 12.
+  std::vector<Sheet> sheets{crumpled(1, 14, 12, 0.5, 0.4, {0.8, 0.6}), crumpled(2, 14, 12, 0.5, 0.4, {0.8, 0.6}),
+                            grid(48, 48, [&](Scalar u, Scalar v) {
+                              const Scalar w = u < 12 ? 0.5 : 0.01;
+                              const Vec3 p(u + w * wobble(rng), v + w * wobble(rng), std::sin(u * 0.3) + w * wobble(rng));
+                              return std::pair{p, Vec3(p + w * Vec3(wobble(rng), wobble(rng), wobble(rng)))};
+                            })};
+  for (std::size_t k = 0; k < sheets.size(); ++k) {
+    const Sheet& s = sheets[k];
+    const FeatureOwners owners = feature_owners(s.triangles);
+    const auto volumes = vertex_volumes(s.start, s.end, 0.02);
+    std::vector<std::uint8_t> moved(s.start.size(), 0);
+    for (std::size_t v = 0; v < moved.size(); v += 5) moved[v] = 1;
+    PatchTree tree(s.triangles, s.start);
+    for (const bool restricted : {false, true})
+      for (int threads : {1, 2}) {
+        const std::span<const std::uint8_t> flags = restricted ? std::span<const std::uint8_t>(moved) : std::span<const std::uint8_t>{};
+        SelfCullCounters counters;
+        const Pairs listed = tree.self_pairs(s.start, s.end, 0.02, threads, &counters, flags);
+        const auto expected = keys(feature_pairs(s.triangles, s.triangles, listed, owners, owners, volumes, 1, flags));
+        Candidates orphans;
+        const Pairs fewer = tree.self_pairs(s.start, s.end, 0.02, threads, nullptr, flags, &orphans);
+        std::size_t adjacent = 0;
+        for (const auto& [i, j] : fewer)
+          for (std::int32_t v : s.triangles[std::size_t(i)]) adjacent += v == s.triangles[std::size_t(j)][0] ||
+                                                                          v == s.triangles[std::size_t(j)][1] ||
+                                                                          v == s.triangles[std::size_t(j)][2];
+        EXPECT_EQ(adjacent, 0u) << "sheet " << k;
+        EXPECT_LT(fewer.size(), listed.size()) << "sheet " << k;
+        keep_overlapping(orphans, volumes);
+        Candidates all = feature_pairs(s.triangles, s.triangles, fewer, owners, owners, volumes, 1, flags);
+        all.vertex_face.insert(all.vertex_face.end(), orphans.vertex_face.begin(), orphans.vertex_face.end());
+        all.edge_edge.insert(all.edge_edge.end(), orphans.edge_edge.begin(), orphans.edge_edge.end());
+        EXPECT_GT(expected.size(), 100u) << "sheet " << k;
+        EXPECT_EQ(keys(all), expected) << "sheet " << k << " restricted " << restricted << " threads " << threads;
+        if (k == 2) {
+          EXPECT_GT(counters.triangles_culled, 0) << "culled in parts";
+          EXPECT_LT(counters.triangles_culled, long(s.triangles.size()));
+        }
+      }
+  }
+}

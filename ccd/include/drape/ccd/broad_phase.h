@@ -123,4 +123,8 @@ Candidates feature_pairs(std::span<const TriangleIndices> triangles_a, std::span
                          const FeatureOwners& owners_b, std::span<const FeatureVolume> vertex_volumes = {}, int threads = 1,
                          std::span<const std::uint8_t> moved = {});
 
+/// Keeps the tests whose features' volumes overlap, as feature_pairs culls them: a vertex's
+/// volume against its face's (its corners' merged), an edge's against the other's.
+void keep_overlapping(Candidates& tests, std::span<const FeatureVolume> vertex_volumes);
+
 }  // namespace drape::ccd

@@ -48,14 +48,22 @@ class PatchTree {
 
   /// The triangle pairs (i < j) whose swept boxes (corners at start and at end, grown by
   /// margin) overlap, leaving out every pair inside a patch proven free of self-contact for the
-  /// whole step. Pairs of triangles sharing a vertex are kept (their other features can still
-  /// meet). Sorted; the same for any thread count. With moved (a flag per vertex), only the
+  /// whole step. Sorted; the same for any thread count. With moved (a flag per vertex), only the
   /// pairs with a triangle holding a moved vertex: a later detection round's, when the others'
   /// motion is the one an earlier round already tested.
+  ///
+  /// Without orphans, pairs of triangles sharing a vertex are listed too (their other features
+  /// can still meet). With orphans, they never are: their tests, made once when the tree was
+  /// built (orphan sets, Curtis, Tamstorf and Manocha 2008: feature_pairs' owned tests of every
+  /// such pair, grouped by the lowest patch holding both), come in orphans instead, those of
+  /// the patches the traversal reached (not culled), with a moved vertex when moved is given;
+  /// not culled by feature volumes (keep_overlapping). Pairs and orphans together then give
+  /// feature_pairs' owned overload exactly the tests the pairs alone gave it without orphans.
   std::vector<std::pair<std::int32_t, std::int32_t>> self_pairs(std::span<const Vec3> start, std::span<const Vec3> end,
                                                                 Scalar margin, int threads = 1,
                                                                 SelfCullCounters* counters = nullptr,
-                                                                std::span<const std::uint8_t> moved = {});
+                                                                std::span<const std::uint8_t> moved = {},
+                                                                Candidates* orphans = nullptr);
 
  private:
   struct Node {
@@ -82,6 +90,11 @@ class PatchTree {
       return !restricted() || triangle_moved[std::size_t(i)] || triangle_moved[std::size_t(j)];
     }
     bool holds_moved(std::int32_t node) const { return !restricted() || node_moved[std::size_t(node)]; }
+    // With orphans: pairs sharing a vertex are left out, and per node whether the traversal
+    // reached it not culled (its pairs and its children's across pairs listed), set by own and
+    // the parallel split (each node by one task).
+    bool skip_adjacent = false;
+    mutable std::vector<char> reached;
   };
   struct BuildScratch {
     std::vector<std::array<std::int32_t, 3>> neighbours;  // across each triangle's edges; -1: none
@@ -99,6 +112,14 @@ class PatchTree {
            SelfCullCounters& counters) const;
   void across(const Motion& motion, std::int32_t a, std::int32_t b,
               std::vector<std::pair<std::int32_t, std::int32_t>>& out) const;
+
+  // The orphan sets, built once: the pairs of triangles sharing a vertex by their lowest
+  // common node, and each node's tests of them (CSR: orphan_vf_start_[node] to [node + 1]).
+  void build_orphans();
+  bool adjacent(std::int32_t i, std::int32_t j) const;  // order_ positions i and j share a vertex
+  std::vector<VertexFacePair> orphan_vf_;
+  std::vector<EdgeEdgePair> orphan_ee_;
+  std::vector<std::int32_t> orphan_vf_start_, orphan_ee_start_;
 
   std::vector<TriangleIndices> triangles_;
   std::vector<std::int32_t> order_;     // triangle indices, each leaf's contiguous
