@@ -109,8 +109,9 @@ void PatchTree::build_orphans() {
   for (std::size_t t = 0; t < triangles_.size(); ++t)
     for (std::int32_t v : triangles_[t]) around[std::size_t(v)].push_back(std::int32_t(t));
   std::vector<std::tuple<std::int32_t, std::int32_t, std::int32_t>> adjacent;  // (node, i, j)
+  std::vector<std::int32_t> others;
   for (std::size_t t = 0; t < triangles_.size(); ++t) {
-    std::vector<std::int32_t> others;
+    others.clear();
     for (std::int32_t v : triangles_[t])
       for (std::int32_t u : around[std::size_t(v)])
         if (u > std::int32_t(t)) others.push_back(u);

@@ -391,7 +391,8 @@ bool ProjectiveSolver::quasi_newton(std::vector<Vec3>& positions, std::string& e
     // tolerance: P >= M, so the step d = P^-1 g has |d|_M^2 <= g^T P^-1 g <= g^T M^-1 g, and
     // no vertex moves farther than sqrt(g^T M^-1 g / least mass) (a free fall's first guess
     // is its answer: no back-substitution at all).
-    if (inverse_mass_norm(gradient_) <= converged_move_ * converged_move_ * least_mass_) break;
+    // (Only without history: L-BFGS's H may move farther than P^-1 along the soft modes.)
+    if (stored == 0 && inverse_mass_norm(gradient_) <= converged_move_ * converged_move_ * least_mass_) break;
     // The two-loop recursion: direction = -H g.
     direction_ = gradient_;
     for (int k = 0; k < stored; ++k) {
@@ -411,6 +412,7 @@ bool ProjectiveSolver::quasi_newton(std::vector<Vec3>& positions, std::string& e
       const Scalar beta = history_rho_[i] * dot(history_t_[i], direction_);
       direction_ += (alpha[i] - beta) * history_s_[i];
     }
+    project(direction_);  // the history's steps may hold parts the active set now takes
     direction_ = -direction_;
     Scalar slope = dot(gradient_, direction_);
     if (!(slope < 0)) {  // not a descent direction: start the history again (the next iteration)
@@ -444,11 +446,14 @@ bool ProjectiveSolver::quasi_newton(std::vector<Vec3>& positions, std::string& e
     project(trial_gradient_);
     // s = the step, t = the gradient's change; kept (over the oldest pair once the history is
     // full) only when the curvature along s is positive. The pairs are kept when the active
-    // set changes (each pair's vectors lose what the set takes at the next projection):
+    // set changes (the direction they make is projected again):
     // restarting there, as vertices come and go along a contact's rim, made the solve at
     // rest little better than local-global (a cloth at rest on a sphere, 2 steps a frame:
     // 133 energy halvings in 240 steps against 66).
-    step_s_ = taken * direction_;
+    step_s_.resize(free_count_, 3);  // the move made: keep_out may have changed the trial's
+    for (std::size_t v = 0; v < positions.size(); ++v)
+      if (const int a = free_index_[v]; a >= 0) step_s_.row(a) = (trial_[v] - positions[v]).transpose();
+    const Scalar moved = step_s_.rowwise().norm().maxCoeff();
     step_t_ = trial_gradient_ - gradient_;
     const Scalar curvature = dot(step_s_, step_t_);
     if (curvature > std::numeric_limits<Scalar>::epsilon() * std::sqrt(dot(step_s_, step_s_) * dot(step_t_, step_t_))) {
@@ -464,7 +469,7 @@ bool ProjectiveSolver::quasi_newton(std::vector<Vec3>& positions, std::string& e
     objective = tried;
     // Converged when a whole step moved no vertex by more than the tolerance's share of an
     // edge (a shortened one says nothing about the distance left).
-    if (taken == 1 && !changed && direction_.rowwise().norm().maxCoeff() <= converged_move_) break;
+    if (taken == 1 && !changed && moved <= converged_move_) break;
   }
   objective_ = objective;
   return true;

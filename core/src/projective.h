@@ -131,15 +131,17 @@ class ProjectiveSolver {
   Scalar contact_terms(const std::vector<Vec3>& x, std::vector<Vec3>* gradient, bool impulses);
   // The spheres and planes as constraints on L-BFGS's iterates (an active set): every free
   // vertex kept at its gap from each, an active vertex's steps along the surface only.
-  // keep_out moves the vertices of x that are closer than their gap out to it and lists them
-  // in entered_; activate makes those active; refresh_active takes the active vertices'
+  // keep_out puts the active vertices of x back at their gap and moves the others that are
+  // closer than it out to it, listing those in entered_; activate makes those active; refresh_active takes the active vertices'
   // normals at x; release frees the active vertices whose gradient (raw, not yet projected)
-  // pulls them off the surface; project removes from rows (per free vertex) what the held
+  // pulls them off a surface (a negative multiplier); project removes from rows (per free vertex) what the held
   // and active vertices may not do. activate and release say whether the set changed.
   void keep_out(std::vector<Vec3>& x);
   bool activate();
   void refresh_active(const std::vector<Vec3>& x);
   bool release(const Block& gradient);
+  // The multipliers of active_[first, last) (one vertex's constraints) for its gradient.
+  void multipliers(std::size_t first, std::size_t last, const Vec3& gradient, Scalar* lambda) const;
   void project(Block& rows) const;
   // After the solve: the active vertices' normal impulses (their reaction, from the raw
   // gradient at the result) and their work at moving obstacles' velocities.

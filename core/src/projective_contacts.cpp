@@ -102,17 +102,23 @@ Scalar ProjectiveSolver::contact_terms(const std::vector<Vec3>& x, std::vector<V
 
 void ProjectiveSolver::keep_out(std::vector<Vec3>& x) {
   entered_.clear();
-  for (std::size_t k = 0; k < shapes_.size(); ++k) {
-    const Scalar* kept_gap = kept_gap_.data() + k * std::size_t(free_count_);
-    for (std::size_t v = 0; v < x.size(); ++v) {
-      const int a = free_index_[v];
-      if (a < 0 || fixed_[std::size_t(a)]) continue;
-      const auto [distance, normal] = shapes_[k].distance(x[v]);
-      if (!(distance < kept_gap[a])) continue;
-      x[v] += (kept_gap[a] - distance) * normal;
-      entered_.emplace_back(int(v), int(k));
+  // An active vertex is put back on its surface at its gap (a step along a sphere's tangent
+  // leaves it); any other closer than its gap is moved out to it. A second pass when there are
+  // several shapes: moving out of one can move a vertex into another (a ball on the ground).
+  const int passes = shapes_.size() > 1 ? 2 : 1;
+  for (int pass = 0; pass < passes; ++pass)
+    for (std::size_t k = 0; k < shapes_.size(); ++k) {
+      const Scalar* kept_gap = kept_gap_.data() + k * std::size_t(free_count_);
+      const char* active = is_active_.data() + k * std::size_t(free_count_);
+      for (std::size_t v = 0; v < x.size(); ++v) {
+        const int a = free_index_[v];
+        if (a < 0 || fixed_[std::size_t(a)]) continue;
+        const auto [distance, normal] = shapes_[k].distance(x[v]);
+        if (!(distance < kept_gap[a]) && !active[a]) continue;
+        x[v] += (kept_gap[a] - distance) * normal;
+        if (!active[a]) entered_.emplace_back(int(v), int(k));
+      }
     }
-  }
 }
 
 bool ProjectiveSolver::activate() {
@@ -143,16 +149,46 @@ void ProjectiveSolver::refresh_active(const std::vector<Vec3>& x) {
   }
 }
 
+void ProjectiveSolver::multipliers(std::size_t first, std::size_t last, const Vec3& gradient, Scalar* lambda) const {
+  // The gradient is sum lambda_i n_i at a constrained stationary point: least squares over the
+  // vertex's normals (one normal: lambda = g . n).
+  const int count = int(last - first);
+  if (count == 1) {
+    lambda[0] = gradient.dot(active_[first].normal);
+    return;
+  }
+  Eigen::Matrix<Scalar, 3, Eigen::Dynamic> normals(3, count);
+  for (int i = 0; i < count; ++i) normals.col(i) = active_[first + std::size_t(i)].normal;
+  const Eigen::Matrix<Scalar, Eigen::Dynamic, 1> solution = normals.completeOrthogonalDecomposition().solve(gradient);
+  for (int i = 0; i < count; ++i) lambda[i] = solution(i);
+}
+
 bool ProjectiveSolver::release(const Block& gradient) {
-  // Descent (-gradient) leads off the surface: the constraint's reaction would be a pull.
-  const auto freed = [&](const ActiveContact& c) {
-    if (!(gradient.row(free_index_[std::size_t(c.vertex)]).dot(c.normal.transpose()) < 0)) return false;
-    is_active_[std::size_t(c.shape) * std::size_t(free_count_) + std::size_t(free_index_[std::size_t(c.vertex)])] = 0;
-    return true;
-  };
-  const std::size_t before = active_.size();
-  active_.erase(std::remove_if(active_.begin(), active_.end(), freed), active_.end());
-  return active_.size() != before;
+  // The vertices whose descent (-gradient) leads off a surface: the constraint's reaction, its
+  // multiplier, would be a pull. Per vertex the most negative of its multipliers is freed.
+  std::vector<ActiveContact> kept;
+  kept.reserve(active_.size());
+  bool changed = false;
+  for (std::size_t first = 0; first < active_.size();) {
+    std::size_t last = first + 1;
+    while (last < active_.size() && active_[last].vertex == active_[first].vertex) ++last;
+    const int a = free_index_[std::size_t(active_[first].vertex)];
+    std::array<Scalar, 8> lambda{};
+    const std::size_t count = std::min<std::size_t>(last - first, lambda.size());
+    multipliers(first, first + count, gradient.row(a).transpose(), lambda.data());
+    const std::size_t weakest = std::size_t(std::min_element(lambda.begin(), lambda.begin() + long(count)) - lambda.begin());
+    for (std::size_t e = first; e < last; ++e) {
+      if (e - first == weakest && lambda[weakest] < 0) {
+        is_active_[std::size_t(active_[e].shape) * std::size_t(free_count_) + std::size_t(a)] = 0;
+        changed = true;
+      } else {
+        kept.push_back(active_[e]);
+      }
+    }
+    first = last;
+  }
+  active_.swap(kept);
+  return changed;
 }
 
 void ProjectiveSolver::project(Block& rows) const {
@@ -167,16 +203,25 @@ void ProjectiveSolver::project(Block& rows) const {
 void ProjectiveSolver::active_reactions(const std::vector<Vec3>& x, const Block& gradient) {
   const Scalar h = step_.step->h;
   const ProjectiveContacts& c = *step_.step->contacts;
-  for (const ActiveContact& contact : active_) {
-    // The constraint balances the gradient's part along its basis (the objective's force is
+  for (std::size_t first = 0; first < active_.size();) {
+    std::size_t last = first + 1;
+    while (last < active_.size() && active_[last].vertex == active_[first].vertex) ++last;
+    const int v = active_[first].vertex;
+    // Each constraint balances its multiplier's share of the gradient (the objective's force is
     // minus its gradient over h^2; an impulse is h times a force).
-    const Scalar reaction = gradient.row(free_index_[std::size_t(contact.vertex)]).dot(contact.basis.transpose());
-    if (!(reaction > 0)) continue;
-    const Scalar impulse = reaction / h;
-    contact_impulse_[std::size_t(contact.vertex)] += impulse;
-    const PosedShape& shape = shapes_[std::size_t(contact.shape)];
-    if (shape.obstacle->spec.motion.moves())
-      contact_work_ += impulse * contact.normal.dot(analytic_contact(shape, c.t_end, x[std::size_t(contact.vertex)]).surface_velocity);
+    std::array<Scalar, 8> lambda{};
+    const std::size_t count = std::min<std::size_t>(last - first, lambda.size());
+    multipliers(first, first + count, gradient.row(free_index_[std::size_t(v)]).transpose(), lambda.data());
+    for (std::size_t i = 0; i < count; ++i) {
+      if (!(lambda[i] > 0)) continue;
+      const Scalar impulse = lambda[i] / h;
+      const ActiveContact& contact = active_[first + i];
+      contact_impulse_[std::size_t(v)] += impulse;
+      const PosedShape& shape = shapes_[std::size_t(contact.shape)];
+      if (shape.obstacle->spec.motion.moves())
+        contact_work_ += impulse * contact.normal.dot(analytic_contact(shape, c.t_end, x[std::size_t(v)]).surface_velocity);
+    }
+    first = last;
   }
 }
 

@@ -148,7 +148,8 @@ struct WindSpec {
 enum class SolverKind { Cholmod, ConjugateGradient, Projective };
 
 /// solver.tolerance's default for a solver type: cg's relative residual, or the projective
-/// solver's share of an edge (SolverSpec::tolerance; 0: every one of its iterations).
+/// solver's share of an edge (SolverSpec::tolerance; 0: every one of its iterations until no
+/// vertex could move a millionth of an edge).
 inline constexpr Scalar CG_TOLERANCE = 1e-8;
 inline constexpr Scalar PROJECTIVE_TOLERANCE = 0;
 
