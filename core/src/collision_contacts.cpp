@@ -38,6 +38,7 @@ std::vector<SolveContact> CollisionPipeline::mesh_contacts(const std::vector<Vec
     const Scalar distance = offset.norm();
     if (!(distance < reach) || !(distance > 0)) return;
     contact.normal = offset / distance;
+    contact.distance = distance;
     contact.surface_velocity = obstacle_velocity;
     contact.target = contact.normal.dot(obstacle_velocity);
     std::array<int, 3> key = contact.vertex;

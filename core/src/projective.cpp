@@ -168,6 +168,7 @@ bool ProjectiveSolver::solve(const ProjectiveStep& step, std::vector<Vec3>& posi
   contact_impulse_.assign(positions.size(), 0);
   contact_work_ = 0;
   shapes_.clear();
+  planes_.clear();
   active_.clear();
   if (step.contacts && history_ > 0) prepare_contacts(*step.contacts);
   const bool ok = history_ > 0 ? quasi_newton(positions, error) : local_global(positions, error);

@@ -227,9 +227,23 @@ class ProjectiveSolver {
   std::vector<Scalar> contact_impulse_;                    // per vertex, N s
   std::vector<PosedShape> shapes_;  // empty unless the step holds analytic contacts
   std::vector<Scalar> kept_gap_;    // per shape and free vertex (shape-major): the gap the solve keeps
+  // The mesh contacts of a single free cloth vertex (a cloth vertex against an obstacle's
+  // face), held as constraints too: normal . x >= offset for that vertex.
+  struct VertexPlane {
+    int vertex = 0;
+    Vec3 normal = Vec3::UnitZ();
+    Scalar offset = 0;
+    std::size_t contact = 0;  // in ProjectiveContacts::mesh
+  };
+  std::vector<VertexPlane> planes_;
+  std::vector<char> plane_active_, as_plane_;  // per plane; per mesh contact: held as a plane
+  // A constraint (a shape, or shapes_.size() + a plane) at x: its distance beyond the gap it
+  // keeps, and its normal; and its active flag for free vertex a.
+  std::pair<Scalar, Vec3> surface(int constraint, int a, const Vec3& x) const;
+  char& active_flag(int constraint, int a);
   struct ActiveContact {
     int vertex = 0;  // global index (a free vertex)
-    int shape = 0;   // in shapes_
+    int shape = 0;   // in shapes_, or shapes_.size() + a plane
     Vec3 normal = Vec3::UnitZ();  // the surface's at the vertex
     Vec3 basis = Vec3::UnitZ();   // normal less the vertex's earlier active normals (Gram-Schmidt), unit or zero
   };

@@ -39,6 +39,14 @@ void ProjectiveSolver::prepare_contacts(const ProjectiveContacts& c) {
   is_active_.assign(shapes_.size() * std::size_t(free_count_), 0);
   contact_bound_.resize(c.mesh.size());
   contact_stiffness_.resize(c.mesh.size());
+  planes_.clear();
+  as_plane_.assign(c.mesh.size(), 0);
+  // Mesh contacts per free vertex: a vertex with several (near an obstacle's edge or corner)
+  // keeps their penalties, since their planes' intersection would hold it out of the region
+  // around a convex edge that it may enter.
+  std::vector<int> contacts_of(x0.size(), 0);
+  for (const SolveContact& contact : c.mesh)
+    for (int i = 0; i < contact.count; ++i) ++contacts_of[std::size_t(contact.vertex[i])];
   for (std::size_t k = 0; k < c.mesh.size(); ++k) {
     const SolveContact& contact = c.mesh[k];
     Scalar bound = h * contact.target, stiffness = 0;
@@ -49,7 +57,31 @@ void ProjectiveSolver::prepare_contacts(const ProjectiveContacts& c) {
     }
     contact_bound_[k] = bound;
     contact_stiffness_[k] = stiffness;
+    // One free cloth vertex: a plane constraint on it, as the spheres and planes are held,
+    // which it may approach down to the margin (the penalty keeps the start's distance).
+    if (contact.count == 1 && contact.weight[0] > 0 && free_index_[std::size_t(contact.vertex[0])] >= 0 &&
+        contacts_of[std::size_t(contact.vertex[0])] == 1) {
+      const Scalar approach = std::max<Scalar>(0, contact.distance - c.margin);
+      planes_.push_back({contact.vertex[0], contact.normal, (bound - approach) / contact.weight[0], k});
+      as_plane_[k] = 1;
+    }
   }
+  plane_active_.assign(planes_.size(), 0);
+}
+
+std::pair<Scalar, Vec3> ProjectiveSolver::surface(int constraint, int a, const Vec3& x) const {
+  const auto k = std::size_t(constraint);
+  if (k < shapes_.size()) {
+    const auto [distance, normal] = shapes_[k].distance(x);
+    return {distance - kept_gap_[k * std::size_t(free_count_) + std::size_t(a)], normal};
+  }
+  const VertexPlane& plane = planes_[k - shapes_.size()];
+  return {plane.normal.dot(x) - plane.offset, plane.normal};
+}
+
+char& ProjectiveSolver::active_flag(int constraint, int a) {
+  const auto k = std::size_t(constraint);
+  return k < shapes_.size() ? is_active_[k * std::size_t(free_count_) + std::size_t(a)] : plane_active_[k - shapes_.size()];
 }
 
 Scalar ProjectiveSolver::contact_terms(const std::vector<Vec3>& x, std::vector<Vec3>* gradient, bool impulses) {
@@ -61,6 +93,7 @@ Scalar ProjectiveSolver::contact_terms(const std::vector<Vec3>& x, std::vector<V
   // The mesh contacts: a one-sided quadratic on how far their cloth points fall short of
   // their bound (continuous in its gradient, as L-BFGS needs).
   for (std::size_t k = 0; k < c->mesh.size(); ++k) {
+    if (as_plane_[k]) continue;  // held as a constraint (keep_out)
     const SolveContact& contact = c->mesh[k];
     Scalar reached = 0;
     for (int i = 0; i < contact.count; ++i) reached += contact.weight[i] * contact.normal.dot(x[std::size_t(contact.vertex[i])]);
@@ -104,27 +137,29 @@ void ProjectiveSolver::keep_out(std::vector<Vec3>& x) {
   entered_.clear();
   // An active vertex is put back on its surface at its gap (a step along a sphere's tangent
   // leaves it); any other closer than its gap is moved out to it. A second pass when there are
-  // several shapes: moving out of one can move a vertex into another (a ball on the ground).
-  const int passes = shapes_.size() > 1 ? 2 : 1;
-  for (int pass = 0; pass < passes; ++pass)
-    for (std::size_t k = 0; k < shapes_.size(); ++k) {
-      const Scalar* kept_gap = kept_gap_.data() + k * std::size_t(free_count_);
-      const char* active = is_active_.data() + k * std::size_t(free_count_);
-      for (std::size_t v = 0; v < x.size(); ++v) {
-        const int a = free_index_[v];
-        if (a < 0 || fixed_[std::size_t(a)]) continue;
-        const auto [distance, normal] = shapes_[k].distance(x[v]);
-        if (!(distance < kept_gap[a]) && !active[a]) continue;
-        x[v] += (kept_gap[a] - distance) * normal;
-        if (!active[a]) entered_.emplace_back(int(v), int(k));
-      }
-    }
+  // several constraints: moving out of one can move a vertex into another (a ball on the
+  // ground, a table's edge).
+  const auto hold = [&](int constraint, std::size_t v) {
+    const int a = free_index_[v];
+    if (a < 0 || fixed_[std::size_t(a)]) return;
+    const bool active = active_flag(constraint, a);
+    const auto [beyond, normal] = surface(constraint, a, x[v]);
+    if (!(beyond < 0) && !active) return;
+    x[v] -= beyond * normal;
+    if (!active) entered_.emplace_back(int(v), constraint);
+  };
+  const int passes = shapes_.size() + planes_.size() > 1 ? 2 : 1;
+  for (int pass = 0; pass < passes; ++pass) {
+    for (std::size_t k = 0; k < shapes_.size(); ++k)
+      for (std::size_t v = 0; v < x.size(); ++v) hold(int(k), v);
+    for (std::size_t p = 0; p < planes_.size(); ++p) hold(int(shapes_.size() + p), std::size_t(planes_[p].vertex));
+  }
 }
 
 bool ProjectiveSolver::activate() {
   bool changed = false;
   for (const auto& [v, k] : entered_) {
-    char& flag = is_active_[std::size_t(k) * std::size_t(free_count_) + std::size_t(free_index_[std::size_t(v)])];
+    char& flag = active_flag(k, free_index_[std::size_t(v)]);
     if (flag) continue;
     flag = 1;
     active_.push_back({v, k});
@@ -139,7 +174,7 @@ bool ProjectiveSolver::activate() {
 void ProjectiveSolver::refresh_active(const std::vector<Vec3>& x) {
   for (std::size_t e = 0; e < active_.size(); ++e) {
     ActiveContact& c = active_[e];
-    c.normal = shapes_[std::size_t(c.shape)].distance(x[std::size_t(c.vertex)]).second;
+    c.normal = surface(c.shape, free_index_[std::size_t(c.vertex)], x[std::size_t(c.vertex)]).second;
     // A vertex against two or three surfaces at once (a sphere resting on a plane's corner):
     // its later normals less the earlier ones.
     c.basis = c.normal;
@@ -179,7 +214,7 @@ bool ProjectiveSolver::release(const Block& gradient) {
     const std::size_t weakest = std::size_t(std::min_element(lambda.begin(), lambda.begin() + long(count)) - lambda.begin());
     for (std::size_t e = first; e < last; ++e) {
       if (e - first == weakest && lambda[weakest] < 0) {
-        is_active_[std::size_t(active_[e].shape) * std::size_t(free_count_) + std::size_t(a)] = 0;
+        active_flag(active_[e].shape, a) = 0;
         changed = true;
       } else {
         kept.push_back(active_[e]);
@@ -217,6 +252,11 @@ void ProjectiveSolver::active_reactions(const std::vector<Vec3>& x, const Block&
       const Scalar impulse = lambda[i] / h;
       const ActiveContact& contact = active_[first + i];
       contact_impulse_[std::size_t(v)] += impulse;
+      if (std::size_t(contact.shape) >= shapes_.size()) {  // a mesh contact's plane
+        const SolveContact& mesh = c.mesh[planes_[std::size_t(contact.shape) - shapes_.size()].contact];
+        contact_work_ += impulse * mesh.normal.dot(mesh.surface_velocity);
+        continue;
+      }
       const PosedShape& shape = shapes_[std::size_t(contact.shape)];
       if (shape.obstacle->spec.motion.moves())
         contact_work_ += impulse * contact.normal.dot(analytic_contact(shape, c.t_end, x[std::size_t(v)]).surface_velocity);

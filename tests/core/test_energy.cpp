@@ -96,6 +96,29 @@ TEST(Energy, ATableclothOnATableMeshStaysWithinItsBoundWithoutHalving) {
   }
 }
 
+// The shipped tablecloth with the projective solver: the cloth's vertices resting on the top
+// held as constraints (one mesh contact each; a vertex near an edge keeps its penalty), as the
+// spheres and planes are. With the penalty alone the top's vertices sank within the thickness,
+// the response's repulsion pushed them out every step and strained the cloth (in full: stretch
+// 1.15, energy 0.98 J over its bound, 24 frames past the warning limit; with the constraints
+// 1.07, 0.385 J, none).
+// Its first 24 frames (landing, the flaps falling past the top's edges; 7 s).
+TEST(Energy, ATableclothOnATableMeshWithTheProjectiveSolverStaysWithinTheWarningLimit) {
+  Scene scene = load_scene(SOURCE + "/scenes/tablecloth.json");
+  scene.solver = SolverSpec{};
+  scene.solver.kind = SolverKind::Projective;
+  scene.solver.tolerance = default_tolerance(SolverKind::Projective);
+  const Model model = build_model(scene);
+  const Ran ran = run(model, "table_projective", 24);
+  // Not yet within a hundredth of the scale like the reference (0.385 J over at frame 12, 3 %
+  // of the scale): within the scene's warning limit, and stretched less.
+  EXPECT_EQ(ran.outcome.end, RunEnd::Completed) << ran.outcome.message;
+  for (const FrameStats& s : ran.frames) {
+    EXPECT_EQ(s.warnings, 0) << "frame " << s.frame;
+    EXPECT_LT(s.max_stretch, 1.1) << "frame " << s.frame;
+  }
+}
+
 // A handle that moves does work: counted, so the energy it gives is within the bound.
 TEST(Energy, AMovingHandlesWorkIsCountedInTheBound) {
   const Model model = build_model(parse_scene(R"({

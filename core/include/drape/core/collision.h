@@ -75,6 +75,7 @@ struct SolveContact {
   Vec3 normal = Vec3::UnitZ();
   Scalar target = 0;
   Vec3 surface_velocity = Vec3::Zero();  ///< the obstacle's at the contact, for friction
+  Scalar distance = 0;                   ///< m: between the cloth's point and the obstacle's at the step's start
   bool analytic = false;                 ///< with a sphere or plane (else a mesh obstacle)
 };
 
