@@ -30,6 +30,8 @@ Integrator::Integrator(const Model& model, int threads) : model_(model), work_(s
   for (int v = 0; v < n; ++v)
     if (model.pin_of_vertex[v] < 0) w.free_index[v] = w.free_count++;
   energy_tolerance_ = STEP_ENERGY_TOLERANCE * energy_scale(model);
+  for (std::size_t k = 0; k < model.springs.size(); ++k)
+    if (model.springs[k].limit > 0) w.limited_springs.push_back(int(k));
   if (model.scene.solver.kind == SolverKind::Projective) {  // a scene pays only for what it asks for
     projective_ = std::make_unique<ProjectiveSolver>(model, w.free_index, w.free_count, threads);
     return;
@@ -148,6 +150,33 @@ int respond_to_analytic_obstacles(const Model& model, const std::vector<Vec3>& s
 
 }  // namespace
 
+void Integrator::limit_strain(State& state, StepReport& report) {
+  const Model& m = model_;
+  const Workspace& w = *work_;
+  const Scalar h = h_;
+  const auto begin = std::chrono::steady_clock::now();
+  const auto inverse_mass = [&](int v) { return w.free_index[std::size_t(v)] >= 0 ? 1 / m.masses[std::size_t(v)] : 0.0; };
+  for (int sweep = 0; sweep < STRAIN_LIMIT_SWEEPS; ++sweep) {
+    bool passed = false;
+    for (int k : w.limited_springs) {
+      const Spring& s = m.springs[std::size_t(k)];
+      const Vec3 d = state.positions[s.i] + h * state.velocities[s.i] - state.positions[s.j] - h * state.velocities[s.j];
+      const Scalar length = d.norm(), longest = s.limit * s.rest_length;
+      if (!(length > longest)) continue;
+      const Scalar wi = inverse_mass(s.i), wj = inverse_mass(s.j);
+      if (!(wi + wj > 0)) continue;  // both ends pinned: their handles decide
+      // The ends' relative velocity along the spring less what brings it back to its limit.
+      const Vec3 change = ((length - longest) / (h * (wi + wj) * length)) * d;
+      state.velocities[s.i] -= wi * change;
+      state.velocities[s.j] += wj * change;
+      ++report.strain_limited;
+      passed = true;
+    }
+    if (!passed) break;
+  }
+  report.strain_ms += std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - begin).count();
+}
+
 StepReport Integrator::advance(State& state) {
   const Model& m = model_;
   Workspace& w = *work_;
@@ -179,6 +208,7 @@ StepReport Integrator::advance(State& state) {
   else w.contacts.clear();
   if (!(projective_ ? solve_projective(state, pinned_dv, report) : solve_linearised(state, pinned_dv, report)))
     return report;
+  if (!w.limited_springs.empty()) limit_strain(state, report);
   report.external_work = source_work(pinned_dv, air_forces, state.velocities) + w.contact_work;
   const bool obstacles_move = std::any_of(m.obstacles.begin(), m.obstacles.end(),
                                           [](const Obstacle& o) { return o.spec.motion.moves(); });
@@ -355,6 +385,8 @@ void StepReport::add(const StepReport& other) {
   collisions.add(other.collisions);
   external_work += other.external_work;
   step_halvings += other.step_halvings;
+  strain_limited += other.strain_limited;
+  strain_ms += other.strain_ms;
 }
 
 Scalar Integrator::source_work(const std::vector<Vec3>& pinned_dv, const std::vector<Vec3>& air_forces,

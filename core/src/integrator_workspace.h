@@ -39,6 +39,8 @@ inline constexpr Scalar HELD_GAP = 1.05;
 // parts, at most 2^solver.max_halvings. The tolerance covers what the analytic obstacles'
 // projection out of the thickness adds (m g times a step's sag, far below it).
 inline constexpr Scalar STEP_ENERGY_TOLERANCE = 1e-3;
+// Strain limiting's sweeps over the limited springs a step, at most.
+inline constexpr int STRAIN_LIMIT_SWEEPS = 200;
 
 // The system matrix over the free vertices, with the place of every 3x3 block in its
 // compressed storage: a block (a, b) occupies rows 3a..3a+2 of columns 3b..3b+2, and the three
@@ -47,6 +49,7 @@ inline constexpr Scalar STEP_ENERGY_TOLERANCE = 1e-3;
 struct Integrator::Workspace {
   std::vector<int> free_index;               // vertex -> free vertex index, or -1 if pinned
   int free_count = 0;
+  std::vector<int> limited_springs;          // the springs with a strain limit (Spring::limit), in order
   SparseMatrix matrix;
   std::vector<std::array<int, 3>> diagonal;  // free vertex -> offsets of its (a, a) block
   struct SpringBlocks {

@@ -231,6 +231,7 @@ Model build_model(const Scene& scene) {
     // A bending rigidity names the hinge model; the bending springs are the other.
     const Scalar bend_springs = m.bending_rigidity > 0 ? 0 : m.bend;
     const bool fabric = m.tensile_stiffness > 0;  // the fabric's stiffnesses, or the springs'
+    const std::size_t first_spring = model.springs.size();
     if (grid) {
       const GridSprings springs = grid_springs(*grid);
       if (fabric) {
@@ -245,6 +246,8 @@ Model build_model(const Scene& scene) {
       else add_springs(model, mesh_edges(mesh), offset, m.stretch, m.damping, SpringKind::Stretch);
       add_springs(model, bending_pairs(mesh), offset, bend_springs, m.damping, SpringKind::Bend);
     }
+    for (std::size_t k = first_spring; k < model.springs.size(); ++k)
+      if (model.springs[k].kind == SpringKind::Stretch) model.springs[k].limit = m.strain_limit;
     if (grid) {
       // A grid's quads bend as both of their triangulations do, at half the rigidity each:
       // one triangulation's right triangles give its hinges stencils that mix bending with

@@ -76,6 +76,8 @@ const std::vector<StatsColumn>& stats_columns() {
       {"external_work", [](S s) { return exact(s.external_work); }},
       {"energy_excess", [](S s) { return exact(s.energy_excess); }},
       {"step_halvings", [](S s) { return integer(s.step_halvings); }},
+      {"strain_limited", [](S s) { return integer(s.strain_limited); }, COUNT},
+      {"strain_ms", [](S s) { return milliseconds(s.strain_ms); }, TIMING},
       {"warnings", [](S s) { return integer(s.warnings); }},
   };
   return columns;
@@ -299,6 +301,8 @@ RunOutcome run_simulation(const Model& model, const RunSettings& settings, const
       totals.solver_warnings += !r.solver_converged;
       totals.collisions.add(r.collisions);
       totals.step_halvings += r.step_halvings;
+      totals.strain_limited += r.strain_limited;
+      totals.strain_ms += r.strain_ms;
       external_work += r.external_work;
       if (!r.ok) {
         outcome.end = RunEnd::Stopped;
@@ -315,6 +319,8 @@ RunOutcome run_simulation(const Model& model, const RunSettings& settings, const
     row.solver_warnings = totals.solver_warnings;
     row.collisions = totals.collisions;
     row.step_halvings = totals.step_halvings;
+    row.strain_limited = totals.strain_limited;
+    row.strain_ms = totals.strain_ms;
     row.external_work = external_work;
     row.energy_excess = row.kinetic_energy + row.potential_energy - (energy_start + external_work);
     // The limits: a warning counted and said, or a stop that keeps this frame.

@@ -212,7 +212,7 @@ ClothSpec read_cloth(const Node& n) {
   if (n.has("material")) {
     const Node m = n.at("material");
     m.allow({"density", "mass_per_area", "stretch", "tensile_stiffness", "shear", "shear_stiffness", "bend",
-             "bending_rigidity", "damping", "air_damping"});
+             "bending_rigidity", "damping", "air_damping", "strain_limit"});
     // A material is the springs' constants or the fabric's measurements, not a mix: a spring
     // key beside the fabric's stiffnesses would be silently ignored or (bend springs) stiffen
     // the sheet by an amount that depends on the resolution.
@@ -242,6 +242,8 @@ ClothSpec read_cloth(const Node& n) {
     if (m.has("bending_rigidity")) c.material.bending_rigidity = m.at("bending_rigidity").positive();  // no bending: `bend` 0
     if (m.has("damping")) c.material.damping = m.at("damping").non_negative();
     if (m.has("air_damping")) c.material.air_damping = m.at("air_damping").non_negative();
+    if (m.has("strain_limit"))
+      c.material.strain_limit = m.at("strain_limit").number_in(MIN_STRAIN_LIMIT, MAX_STRAIN_LIMIT, "from 1.001 to 10");
   }
   return c;
 }

@@ -184,3 +184,37 @@ TEST(Integrator, FrictionHoldsAClothOnAnInclineAndLetsItSlideWhenTooSteep) {
     EXPECT_LT(slid, 1.0 * 0.5 * 1.511) << solver;
   }
 }
+
+// Strain limiting (material.strain_limit): a cloth flung apart in every direction (no gravity,
+// no obstacle) keeps every structural spring within its limit at every step's end, and the
+// limiting's equal and opposite velocity changes keep its momentum; without a limit it
+// stretches past it.
+TEST(Integrator, StrainLimitingKeepsTheLimitAndTheMomentum) {
+  const auto fling = [](const std::string& material) {
+    const Model model = model_of(R"({"frame_time": 0.02, "frame_steps": 2, "gravity": [0, 0, 0],
+      "cloths": [{"grid": {"size": [1, 1], "resolution": [8, 8]}, "material": )" + material + "}]}");
+    State state = initial_state(model);
+    for (std::size_t v = 0; v < state.positions.size(); ++v) state.velocities[v] = 10 * state.positions[v];  // outward
+    Vec3 momentum = Vec3::Zero();
+    for (std::size_t v = 0; v < state.positions.size(); ++v) momentum += model.masses[v] * state.velocities[v];
+    Integrator integrator(model);
+    Scalar stretch = 1;
+    int limited = 0;
+    for (int k = 0; k < 20; ++k) {
+      const StepReport r = integrator.step(state);
+      EXPECT_TRUE(r.ok) << r.failure;
+      limited += r.strain_limited;
+      stretch = std::max(stretch, max_stretch(model, state));
+      Vec3 now = Vec3::Zero();
+      for (std::size_t v = 0; v < state.positions.size(); ++v) now += model.masses[v] * state.velocities[v];
+      EXPECT_LT((now - momentum).norm(), 1e-12) << "step " << k;
+    }
+    return std::make_pair(stretch, limited);
+  };
+  const auto [free_stretch, none] = fling(R"({"stretch": 0.5, "shear": 0.05, "bend": 0})");
+  EXPECT_GT(free_stretch, 1.1);
+  EXPECT_EQ(none, 0);
+  const auto [limited_stretch, corrections] = fling(R"({"stretch": 0.5, "shear": 0.05, "bend": 0, "strain_limit": 1.05})");
+  EXPECT_LE(limited_stretch, 1.05 * (1 + 1e-9));
+  EXPECT_GT(corrections, 0);
+}

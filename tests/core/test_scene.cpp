@@ -81,6 +81,7 @@ TEST(Scene, BadInputNamesTheFileThePathAndWhatWasExpected) {
       {R"({"cloths": [{"grid": {}}], "frames": "ten"})", "/frames: expected an integer, found \"ten\""},
       {R"({"cloths": [{"grid": {}}], "frames": 0})", "/frames: expected an integer from 1"},
       {R"({"cloths": [{"grid": {}, "material": {"density": -1}}]})", "/cloths/0/material/density: expected a number > 0"},
+      {R"({"cloths": [{"grid": {}, "material": {"strain_limit": 1}}]})", "/cloths/0/material/strain_limit: expected a number from 1.001 to 10"},
       {R"({"cloths": [{"grid": {}, "material": {"density": 0.2, "mass_per_area": 200}}]})",
        "/cloths/0/material/mass_per_area: expected 'density' (kg/m^2) or 'mass_per_area' (g/m^2), not both"},
       {R"({"cloths": [{"grid": {}, "material": {"stretch": 9, "tensile_stiffness": 9, "shear_stiffness": 1}}]})",

@@ -80,11 +80,12 @@ TEST(StatsColumns, HeaderRowsAndTolerancesComeFromOneTable) {
             "frame,sim_time,wall_ms,solve_ms,solver_iterations,kinetic_energy,potential_energy,max_stretch,"
             "min_distance_obstacle,obstacle_contacts,solver_warnings,bvh_pairs,culled_triangles,vf_tests,ee_tests,culled,separated,root_solves,"
             "ccd_hits,impulse_iterations,impact_zones,proximity_impulses,rest_clamped_pairs,fail_safes,ccd_ms,broad_ms,narrow_ms,"
-            "response_ms,penetrations,external_work,energy_excess,step_halvings,warnings");
+            "response_ms,penetrations,external_work,energy_excess,step_halvings,strain_limited,strain_ms,warnings");
   FrameStats s;
   s.frame = 7, s.sim_time = 0.1, s.wall_ms = 12.34567, s.solve_ms = 0.5, s.solver_iterations = 42;
   s.kinetic_energy = 1.0 / 3, s.potential_energy = -2.5e-7, s.max_stretch = 1.01, s.min_distance_obstacle = 0.25;
   s.obstacle_contacts = 3, s.solver_warnings = 1, s.external_work = 1e-20, s.energy_excess = -0.125, s.step_halvings = 2;
+  s.strain_limited = 21, s.strain_ms = 5.0004;
   s.warnings = 1;
   CollisionCounters& c = s.collisions;
   c.bvh_pairs = 100, c.culled_triangles = 99, c.vf_tests = 11, c.ee_tests = 12, c.tests.culled = 13, c.tests.separated = 14, c.tests.root_solves = 15;
@@ -93,13 +94,13 @@ TEST(StatsColumns, HeaderRowsAndTolerancesComeFromOneTable) {
   char expected[1024];
   std::snprintf(expected, sizeof expected,
                 "%d,%.17g,%.3f,%.3f,%ld,%.17g,%.17g,%.17g,%.17g,%d,%d,%ld,%ld,%ld,%ld,%llu,%llu,%llu,%ld,%ld,%ld,%ld,%ld,%ld,%.3f,%.3f,%.3f,%.3f,,"
-                "%.17g,%.17g,%d,%d",
+                "%.17g,%.17g,%d,%ld,%.3f,%d",
                 s.frame, s.sim_time, s.wall_ms, s.solve_ms, s.solver_iterations, s.kinetic_energy, s.potential_energy,
                 s.max_stretch, *s.min_distance_obstacle, s.obstacle_contacts, s.solver_warnings, c.bvh_pairs, c.culled_triangles, c.vf_tests,
                 c.ee_tests, static_cast<unsigned long long>(c.tests.culled), static_cast<unsigned long long>(c.tests.separated),
                 static_cast<unsigned long long>(c.tests.root_solves), c.ccd_hits, c.impulse_iterations, c.impact_zones,
                 c.proximity_impulses, c.rest_clamped_pairs, c.fail_safes, c.ccd_ms, c.broad_ms, c.narrow_ms, c.response_ms,
-                s.external_work, s.energy_excess, s.step_halvings, s.warnings);
+                s.external_work, s.energy_excess, s.step_halvings, s.strain_limited, s.strain_ms, s.warnings);
   EXPECT_EQ(stats_row(s), expected);
   s.penetrations = 5;
   s.min_distance_obstacle.reset();
@@ -110,7 +111,8 @@ TEST(StatsColumns, HeaderRowsAndTolerancesComeFromOneTable) {
       {"frame", {0, 0}},           {"sim_time", {1e-12, 1e-12}},          {"solver_iterations", {2, 0.05}},
       {"kinetic_energy", {1e-9, 1e-6}}, {"potential_energy", {1e-9, 1e-6}}, {"max_stretch", {1e-9, 1e-6}},
       {"min_distance_obstacle", {1e-7, 1e-6}}, {"obstacle_contacts", {2, 0.05}}, {"solver_warnings", {0, 0}},
-      {"penetrations", {0, 0}},    {"fail_safes", {0, 0}}};
+      {"penetrations", {0, 0}},    {"fail_safes", {0, 0}},
+      {"strain_limited", {2, 0.05}}};  // added with strain limiting: a count of work, like the iterations
   for (const StatsColumn& column : stats_columns()) {
     const std::string name = column.name;
     const auto listed = stats_tolerances().find(name);

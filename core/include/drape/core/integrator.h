@@ -50,6 +50,10 @@ struct StepReport {
   /// How many times the step was halved because it made energy (Integrator::step): its kept
   /// attempt took 2^step_halvings parts.
   int step_halvings = 0;
+  /// Strain limiting (Material::strain_limit): the corrections made (a spring brought back to
+  /// its limit, counted each time), and their time.
+  int strain_limited = 0;
+  double strain_ms = 0;
   /// Adds another step's report: counts, times and work summed, the first failure kept.
   void add(const StepReport& other);
 };
@@ -109,6 +113,11 @@ class Integrator {
   // The contacts of the free cloth vertices with the obstacles at the state (the workspace's
   // contacts), for the linearised solve to hold.
   void find_contacts(const State& state);
+  // Strain limiting after the solve (Provot 1995, on velocities as Bridson, Fedkiw and
+  // Anderson 2002): each limited spring whose length at the step's end would pass its limit
+  // gets equal and opposite changes of its ends' velocities along it (by inverse mass; the
+  // pinned ends keep theirs), in sweeps over the springs until none passes or the sweeps run out.
+  void limit_strain(State& state, StepReport& report);
   // The linearised system assembled at the state (forces into the workspace) and solved:
   // the state's velocities advanced; false (report says why) when the solve failed.
   bool solve_linearised(State& state, const std::vector<Vec3>& pinned_dv, StepReport& report);

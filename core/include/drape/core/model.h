@@ -22,6 +22,7 @@ struct Spring {
   Scalar stiffness = 0;   ///< N/m
   Scalar damping = 0;     ///< N s/m
   SpringKind kind = SpringKind::Stretch;
+  Scalar limit = 0;       ///< largest length over rest length that strain limiting allows (0: none)
 };
 
 /// One hinge of the quadratic bending model (Bergou, Wardetzky, Harmon, Zorin and Grinspun, "A

@@ -33,6 +33,8 @@ struct FrameStats {
   Scalar external_work = 0;    ///< J, summed since the start: the sources' work (StepReport::external_work)
   Scalar energy_excess = 0;    ///< J: kinetic plus potential energy less (its start plus external_work)
   int step_halvings = 0;       ///< summed StepReport::step_halvings: log2 of the parts each step's kept attempt took
+  long strain_limited = 0;     ///< strain limiting's corrections, summed (StepReport::strain_limited)
+  double strain_ms = 0;        ///< and their time
   int warnings = 0;            ///< limits passed this frame: energy, stretch (0 to 2)
   std::vector<std::string> messages;  ///< what each warning says, for the terminal (not a column)
 };

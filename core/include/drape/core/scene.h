@@ -38,6 +38,7 @@ inline constexpr Scalar MAX_ANGULAR_SPEED = 1e4;  ///< rad/s: motion angular vel
 inline constexpr Scalar MAX_ACCELERATION = 1e4;   ///< m/s^2: gravity
 inline constexpr Scalar MAX_THICKNESS = 1;        ///< m: collisions.thickness (see also the cloth-size rule in build_model)
 inline constexpr int MAX_PROJECTIVE_ITERATIONS = 1000;  ///< solver.iterations
+inline constexpr Scalar MIN_STRAIN_LIMIT = 1.001, MAX_STRAIN_LIMIT = 10;  ///< material.strain_limit
 inline constexpr Scalar MAX_CHEBYSHEV_RHO = 0.9999;     ///< solver.chebyshev
 inline constexpr int MAX_PROJECTIVE_HISTORY = 100;        ///< solver.history
 inline constexpr int MAX_FACTOR_REUSE = 1000;             ///< solver.factor_reuse
@@ -95,6 +96,9 @@ struct Material {
   /// sheet at any resolution.
   Scalar tensile_stiffness = 0;
   Scalar shear_stiffness = 0;
+  /// The largest stretch the fabric allows (a structural spring's length over its rest
+  /// length, above 1), kept by strain limiting after each step's solve; 0: none.
+  Scalar strain_limit = 0;
 };
 
 struct ClothSpec {
