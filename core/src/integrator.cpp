@@ -150,31 +150,41 @@ int respond_to_analytic_obstacles(const Model& model, const std::vector<Vec3>& s
 
 }  // namespace
 
-void Integrator::limit_strain(State& state, StepReport& report) {
+Scalar Integrator::limit_strain(const std::vector<Vec3>& positions, std::vector<Vec3>& motion, std::vector<Vec3>* also,
+                                StepReport& report) {
   const Model& m = model_;
   const Workspace& w = *work_;
   const Scalar h = h_;
   const auto begin = std::chrono::steady_clock::now();
   const auto inverse_mass = [&](int v) { return w.free_index[std::size_t(v)] >= 0 ? 1 / m.masses[std::size_t(v)] : 0.0; };
+  Scalar work = 0;
   for (int sweep = 0; sweep < STRAIN_LIMIT_SWEEPS; ++sweep) {
     bool passed = false;
     for (int k : w.limited_springs) {
       const Spring& s = m.springs[std::size_t(k)];
-      const Vec3 d = state.positions[s.i] + h * state.velocities[s.i] - state.positions[s.j] - h * state.velocities[s.j];
-      const Scalar length = d.norm(), longest = s.limit * s.rest_length;
+      const Vec3 d = positions[s.i] + h * motion[s.i] - positions[s.j] - h * motion[s.j];
+      // A spring the response left past its limit at the step's start is kept from stretching
+      // further, not pulled back within one step (a closing speed of its excess over h).
+      const Scalar length = d.norm(), longest = std::max(s.limit * s.rest_length, (positions[s.i] - positions[s.j]).norm());
       if (!(length > longest)) continue;
       const Scalar wi = inverse_mass(s.i), wj = inverse_mass(s.j);
       if (!(wi + wj > 0)) continue;  // both ends pinned: their handles decide
       // The ends' relative velocity along the spring less what brings it back to its limit.
       const Vec3 change = ((length - longest) / (h * (wi + wj) * length)) * d;
-      state.velocities[s.i] -= wi * change;
-      state.velocities[s.j] += wj * change;
+      motion[s.i] -= wi * change;
+      motion[s.j] += wj * change;
+      if (also) (*also)[s.i] -= wi * change, (*also)[s.j] += wj * change;
+      // A pinned end's handle does work through the spring: the impulse it gives the free
+      // end, against the handle's velocity (for the energy ledger).
+      if (wi == 0) work += std::max<Scalar>(0, change.dot(motion[s.i]));
+      if (wj == 0) work += std::max<Scalar>(0, -change.dot(motion[s.j]));
       ++report.strain_limited;
       passed = true;
     }
     if (!passed) break;
   }
   report.strain_ms += std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - begin).count();
+  return work;
 }
 
 StepReport Integrator::advance(State& state) {
@@ -208,8 +218,8 @@ StepReport Integrator::advance(State& state) {
   else w.contacts.clear();
   if (!(projective_ ? solve_projective(state, pinned_dv, report) : solve_linearised(state, pinned_dv, report)))
     return report;
-  if (!w.limited_springs.empty()) limit_strain(state, report);
-  report.external_work = source_work(pinned_dv, air_forces, state.velocities) + w.contact_work;
+  const Scalar strain_work = w.limited_springs.empty() ? 0 : limit_strain(state.positions, state.velocities, nullptr, report);
+  report.external_work = source_work(pinned_dv, air_forces, state.velocities) + w.contact_work + strain_work;
   const bool obstacles_move = std::any_of(m.obstacles.begin(), m.obstacles.end(),
                                           [](const Obstacle& o) { return o.spec.motion.moves(); });
   const Scalar kinetic_before_response = obstacles_move ? kinetic_energy(m, state) : 0;
@@ -239,6 +249,10 @@ StepReport Integrator::advance(State& state) {
     if (projective_) spread_projective(state.positions, solved, motion, state.velocities, report);
     else spread_response(solved, held, motion, state.velocities, report);
     if (!report.ok) return report;
+    // The projective spread solves the step again for the vertices it does not hold: the limit
+    // once more, on the motion and the velocities alike.
+    if (projective_ && !w.limited_springs.empty())
+      report.external_work += limit_strain(state.positions, motion, &state.velocities, report);
     respond(state, motion, report);
   }
   report.obstacle_contacts = first_contacts;
@@ -372,6 +386,8 @@ StepReport Integrator::step(State& state) {
   report.solve_ms += spent.solve_ms;
   report.solver_iterations += spent.solver_iterations;
   report.collisions.add(spent.collisions);
+  report.strain_limited += spent.strain_limited;
+  report.strain_ms += spent.strain_ms;
   report.step_halvings = halvings;
   return report;
 }

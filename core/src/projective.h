@@ -50,7 +50,8 @@ struct FrictionContact {
 /// vertex kept at the step's end as far from each as it was at the step's start, at most the
 /// margin: outside the thickness, where the response has nothing to do); the mesh obstacles'
 /// contacts of the step's start, whose cloth points may not approach their obstacle faster
-/// than its surface (a penalty); friction.
+/// than its surface (a constraint, its face's plane, for a vertex with one such contact; a
+/// penalty for the others); friction.
 struct ProjectiveContacts {
   bool analytic = false;  ///< hold the spheres and planes
   Scalar t_end = 0;       ///< s: where they are
