@@ -158,6 +158,13 @@ FeatureOwners feature_owners(std::span<const TriangleIndices> triangles) {
 
 namespace {
 
+// The volume of a feature: its vertices' volumes merged.
+FeatureVolume merged_volume(std::span<const FeatureVolume> vertex_volumes, std::span<const std::int32_t> vertices) {
+  FeatureVolume volume = vertex_volumes[std::size_t(vertices[0])];
+  for (std::size_t k = 1; k < vertices.size(); ++k) volume.merge(vertex_volumes[std::size_t(vertices[k])]);
+  return volume;
+}
+
 Candidates features_of(std::span<const TriangleIndices> triangles_a, std::span<const TriangleIndices> triangles_b,
                        std::span<const std::pair<std::int32_t, std::int32_t>> pairs, const FeatureOwners* owners_a,
                        const FeatureOwners* owners_b, std::span<const FeatureVolume> vertex_volumes, int threads,
@@ -171,11 +178,7 @@ Candidates features_of(std::span<const TriangleIndices> triangles_a, std::span<c
   const auto any_moved = [&](std::int32_t a, std::int32_t b, std::int32_t c, std::int32_t d) {
     return moved.empty() || moved[std::size_t(a)] || moved[std::size_t(b)] || moved[std::size_t(c)] || moved[std::size_t(d)];
   };
-  const auto union_of = [&](std::span<const std::int32_t> vertices) {
-    FeatureVolume volume = vertex_volumes[vertices[0]];
-    for (std::size_t k = 1; k < vertices.size(); ++k) volume.merge(vertex_volumes[vertices[k]]);
-    return volume;
-  };
+  const auto union_of = [&](std::span<const std::int32_t> vertices) { return merged_volume(vertex_volumes, vertices); };
   // Each triangle's face and edge volumes, once per call (a triangle is in many pairs).
   struct TriangleVolumes {
     FeatureVolume face;
@@ -302,11 +305,7 @@ Candidates feature_pairs(std::span<const TriangleIndices> triangles_a, std::span
 }
 
 void keep_overlapping(Candidates& tests, std::span<const FeatureVolume> vertex_volumes) {
-  const auto merged = [&](std::span<const std::int32_t> vertices) {
-    FeatureVolume volume = vertex_volumes[std::size_t(vertices[0])];
-    for (std::size_t k = 1; k < vertices.size(); ++k) volume.merge(vertex_volumes[std::size_t(vertices[k])]);
-    return volume;
-  };
+  const auto merged = [&](std::span<const std::int32_t> vertices) { return merged_volume(vertex_volumes, vertices); };
   std::erase_if(tests.vertex_face, [&](const VertexFacePair& t) {
     return !overlap(vertex_volumes[std::size_t(t.vertex)], merged(t.face));
   });

@@ -139,11 +139,13 @@ void PatchTree::build_orphans() {
   }
 }
 
-bool PatchTree::adjacent(std::int32_t i, std::int32_t j) const {
+bool PatchTree::lists(const Motion& m, std::int32_t i, std::int32_t j) const {
+  if (!m.keeps(i, j) || !overlap(m.triangle_box[std::size_t(i)], m.triangle_box[std::size_t(j)])) return false;
+  if (!m.skip_adjacent) return true;
   const TriangleIndices &a = triangles_[std::size_t(order_[std::size_t(i)])], &b = triangles_[std::size_t(order_[std::size_t(j)])];
   for (std::int32_t v : a)
-    if (v == b[0] || v == b[1] || v == b[2]) return true;
-  return false;
+    if (v == b[0] || v == b[1] || v == b[2]) return false;  // sharing a corner: the orphan sets' tests
+  return true;
 }
 
 std::int32_t PatchTree::build(std::vector<std::int32_t>& set, BuildScratch& scratch, std::span<const Vec3> reference) {
@@ -310,8 +312,7 @@ void PatchTree::own(const Motion& m, std::int32_t index, Pairs& out, SelfCullCou
   if (node.right < 0) {
     for (std::int32_t i = node.first; i < node.first + node.count; ++i)
       for (std::int32_t j = i + 1; j < node.first + node.count; ++j)
-        if (m.keeps(i, j) && overlap(m.triangle_box[std::size_t(i)], m.triangle_box[std::size_t(j)]) &&
-            !(m.skip_adjacent && adjacent(i, j)))
+        if (lists(m, i, j))
           out.emplace_back(std::minmax(order_[std::size_t(i)], order_[std::size_t(j)]));
     return;
   }
@@ -326,8 +327,7 @@ void PatchTree::across(const Motion& m, std::int32_t a, std::int32_t b, Pairs& o
   if (na.right < 0 && nb.right < 0) {
     for (std::int32_t i = na.first; i < na.first + na.count; ++i)
       for (std::int32_t j = nb.first; j < nb.first + nb.count; ++j)
-        if (m.keeps(i, j) && overlap(m.triangle_box[std::size_t(i)], m.triangle_box[std::size_t(j)]) &&
-            !(m.skip_adjacent && adjacent(i, j)))
+        if (lists(m, i, j))
           out.emplace_back(std::minmax(order_[std::size_t(i)], order_[std::size_t(j)]));
     return;
   }

@@ -380,12 +380,8 @@ bool ProjectiveSolver::quasi_newton(std::vector<Vec3>& positions, std::string& e
   std::vector<Scalar> alpha(static_cast<std::size_t>(memory), 0.0);
   int stored = 0, newest = -1;  // the history is a ring
   keep_out(positions);
-  activate();
-  refresh_active(positions);
   Scalar objective = evaluate(positions, &gradient_);
-  if (release(gradient_)) refresh_active(positions);
-  raw_gradient_ = gradient_;
-  project(gradient_);
+  settle(positions, gradient_);
   trial_ = positions;
   for (int iteration = 0; iteration < iterations_; ++iteration) {
     // Converged before the back-substitution when no vertex could move farther than the
@@ -440,11 +436,7 @@ bool ProjectiveSolver::quasi_newton(std::vector<Vec3>& positions, std::string& e
     if (!(tried < objective)) break;  // no progress along it: as good as this iteration gets
     // The active set at the new iterate: the vertices the trial reached a surface with, less
     // those its gradient pulls off one.
-    bool changed = activate();
-    refresh_active(trial_);
-    if (release(trial_gradient_)) changed = true, refresh_active(trial_);
-    raw_gradient_ = trial_gradient_;
-    project(trial_gradient_);
+    const bool changed = settle(trial_, trial_gradient_);
     // s = the step, t = the gradient's change; kept (over the oldest pair once the history is
     // full) only when the curvature along s is positive. The pairs are kept when the active
     // set changes (the direction they make is projected again):

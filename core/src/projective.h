@@ -21,6 +21,7 @@
 /// softer than that (their stretch is what sweep measures against the reference); Chebyshev
 /// acceleration (solver.chebyshev) brings it closer in the same iterations.
 
+#include <array>
 #include <limits>
 #include <map>
 #include <memory>
@@ -130,19 +131,28 @@ class ProjectiveSolver {
   // gradient when given; with impulses, each vertex's normal impulse into contact_impulse_ and
   // the work into contact_work_.
   Scalar contact_terms(const std::vector<Vec3>& x, std::vector<Vec3>* gradient, bool impulses);
-  // The spheres and planes as constraints on L-BFGS's iterates (an active set): every free
-  // vertex kept at its gap from each, an active vertex's steps along the surface only.
-  // keep_out puts the active vertices of x back at their gap and moves the others that are
-  // closer than it out to it, listing those in entered_; activate makes those active; refresh_active takes the active vertices'
-  // normals at x; release frees the active vertices whose gradient (raw, not yet projected)
-  // pulls them off a surface (a negative multiplier); project removes from rows (per free vertex) what the held
-  // and active vertices may not do. activate and release say whether the set changed.
+  // The spheres and planes (and the single mesh contacts' planes) as constraints on L-BFGS's
+  // iterates (an active set): every free vertex kept at its gap from each, an active vertex's
+  // steps along the surface only. keep_out puts the active vertices of x back at their gap and
+  // moves the others that are closer than it out to it, listing those in entered_; activate
+  // makes those active; refresh_active takes the active vertices' normals at x; release frees
+  // the active vertices whose gradient (raw, not yet projected) pulls them off a surface (a
+  // negative multiplier); project removes from rows (per free vertex) what the held and active
+  // vertices may not do. activate and release say whether the set changed. settle does what
+  // an iterate x needs after keep_out and its evaluation: activate, release, gradient kept raw
+  // in raw_gradient_ and projected; whether the set changed.
   void keep_out(std::vector<Vec3>& x);
   bool activate();
   void refresh_active(const std::vector<Vec3>& x);
   bool release(const Block& gradient);
-  // The multipliers of active_[first, last) (one vertex's constraints) for its gradient.
-  void multipliers(std::size_t first, std::size_t last, const Vec3& gradient, Scalar* lambda) const;
+  bool settle(const std::vector<Vec3>& x, Block& gradient);
+  // One vertex's active constraints, active_[first, last), and their multipliers for its row
+  // of gradient (least squares over its normals; at most 8 of them weighed).
+  struct VertexConstraints {
+    std::size_t first = 0, last = 0, count = 0;
+    std::array<Scalar, 8> lambda{};
+  };
+  VertexConstraints constraints_at(std::size_t first, const Block& gradient) const;
   void project(Block& rows) const;
   // After the solve: the active vertices' normal impulses (their reaction, from the raw
   // gradient at the result) and their work at moving obstacles' velocities.
@@ -152,12 +162,11 @@ class ProjectiveSolver {
   bool local_global(std::vector<Vec3>& positions, std::string& error);
   bool quasi_newton(std::vector<Vec3>& positions, std::string& error);
   // A mesh contact's penalty weight in the objective, per kilogram of its vertex (the heaviest
-  // of its vertices), also the bound on friction's stiffness while sticking: stiff against the
-  // vertex's inertia (a resting vertex yields g h^2 / 10 a step, within the margin), soft
-  // against its springs. The run's matrix knows a cloth's collective
-  // motions (a whole sheet pressed onto a plane) only by their masses; a weight of the springs'
-  // order there made L-BFGS's first steps thousands of times too long and its normal forces,
-  // hence friction, wrong.
+  // of its vertices): stiff against the vertex's inertia (a resting vertex yields g h^2 / 10 a
+  // step, within the margin), soft against its springs. The run's matrix knows a cloth's
+  // collective motions (a whole sheet pressed onto a plane) only by their masses; a weight of
+  // the springs' order there made L-BFGS's first steps thousands of times too long and its
+  // normal forces, hence friction, wrong.
   static constexpr Scalar CONTACT_HOLD = 10;
   // Friction's stiffness while sticking, per kilogram of its vertex, at most: a cloth held
   // on a 20 degree incline by friction 0.5 creeps 0.52 mm in a second at 30 (1.5 mm at 10,
@@ -224,7 +233,6 @@ class ProjectiveSolver {
   std::vector<Scalar> history_rho_;
   std::vector<Vec3> trial_;                               // every vertex: the line search's point
   std::vector<Scalar> contact_bound_, contact_stiffness_;  // per mesh contact: n . sum w x at least this; its weight
-  std::vector<Scalar> vertex_stiffness_;                   // per free vertex: a mesh contact's weight
   std::vector<Scalar> contact_impulse_;                    // per vertex, N s
   std::vector<PosedShape> shapes_;  // empty unless the step holds analytic contacts
   std::vector<Scalar> kept_gap_;    // per shape and free vertex (shape-major): the gap the solve keeps

@@ -15,11 +15,6 @@ void ProjectiveSolver::prepare_contacts(const ProjectiveContacts& c) {
   const Model& m = model_;
   const Scalar h = step_.step->h;
   const std::vector<Vec3>& x0 = *step_.step->start;
-  // Each held contact's weight, from its vertices' masses; a mesh contact's bound:
-  // its cloth points' normal position at the start plus what the surface moves in the step.
-  vertex_stiffness_.resize(std::size_t(free_count_));
-  for (std::size_t v = 0; v < x0.size(); ++v)
-    if (const int a = free_index_[v]; a >= 0) vertex_stiffness_[std::size_t(a)] = CONTACT_HOLD * m.masses[v];
   shapes_.clear();
   // Each sphere and plane posed at the step's end, and at its start for the gaps below.
   if (c.analytic)
@@ -47,13 +42,15 @@ void ProjectiveSolver::prepare_contacts(const ProjectiveContacts& c) {
   std::vector<int> contacts_of(x0.size(), 0);
   for (const SolveContact& contact : c.mesh)
     for (int i = 0; i < contact.count; ++i) ++contacts_of[std::size_t(contact.vertex[i])];
+  // Each mesh contact's weight, from its heaviest free vertex's mass, and its bound: its
+  // cloth points' normal position at the start plus what the surface moves in the step.
   for (std::size_t k = 0; k < c.mesh.size(); ++k) {
     const SolveContact& contact = c.mesh[k];
     Scalar bound = h * contact.target, stiffness = 0;
     for (int i = 0; i < contact.count; ++i) {
       const std::size_t v = std::size_t(contact.vertex[i]);
       bound += contact.weight[i] * contact.normal.dot(x0[v]);
-      if (free_index_[v] >= 0) stiffness = std::max(stiffness, vertex_stiffness_[std::size_t(free_index_[v])]);
+      if (free_index_[v] >= 0) stiffness = std::max(stiffness, CONTACT_HOLD * m.masses[v]);
     }
     contact_bound_[k] = bound;
     contact_stiffness_[k] = stiffness;
@@ -184,18 +181,24 @@ void ProjectiveSolver::refresh_active(const std::vector<Vec3>& x) {
   }
 }
 
-void ProjectiveSolver::multipliers(std::size_t first, std::size_t last, const Vec3& gradient, Scalar* lambda) const {
+ProjectiveSolver::VertexConstraints ProjectiveSolver::constraints_at(std::size_t first, const Block& gradient) const {
+  VertexConstraints c;
+  c.first = first;
+  c.last = first + 1;
+  while (c.last < active_.size() && active_[c.last].vertex == active_[first].vertex) ++c.last;
+  c.count = std::min(c.last - first, c.lambda.size());
   // The gradient is sum lambda_i n_i at a constrained stationary point: least squares over the
   // vertex's normals (one normal: lambda = g . n).
-  const int count = int(last - first);
-  if (count == 1) {
-    lambda[0] = gradient.dot(active_[first].normal);
-    return;
+  const Vec3 g = gradient.row(free_index_[std::size_t(active_[first].vertex)]).transpose();
+  if (c.count == 1) {
+    c.lambda[0] = g.dot(active_[first].normal);
+    return c;
   }
-  Eigen::Matrix<Scalar, 3, Eigen::Dynamic> normals(3, count);
-  for (int i = 0; i < count; ++i) normals.col(i) = active_[first + std::size_t(i)].normal;
-  const Eigen::Matrix<Scalar, Eigen::Dynamic, 1> solution = normals.completeOrthogonalDecomposition().solve(gradient);
-  for (int i = 0; i < count; ++i) lambda[i] = solution(i);
+  Eigen::Matrix<Scalar, 3, Eigen::Dynamic> normals(3, Eigen::Index(c.count));
+  for (std::size_t i = 0; i < c.count; ++i) normals.col(Eigen::Index(i)) = active_[first + i].normal;
+  const Eigen::Matrix<Scalar, Eigen::Dynamic, 1> solution = normals.completeOrthogonalDecomposition().solve(g);
+  for (std::size_t i = 0; i < c.count; ++i) c.lambda[i] = solution(Eigen::Index(i));
+  return c;
 }
 
 bool ProjectiveSolver::release(const Block& gradient) {
@@ -205,24 +208,28 @@ bool ProjectiveSolver::release(const Block& gradient) {
   kept.reserve(active_.size());
   bool changed = false;
   for (std::size_t first = 0; first < active_.size();) {
-    std::size_t last = first + 1;
-    while (last < active_.size() && active_[last].vertex == active_[first].vertex) ++last;
-    const int a = free_index_[std::size_t(active_[first].vertex)];
-    std::array<Scalar, 8> lambda{};
-    const std::size_t count = std::min<std::size_t>(last - first, lambda.size());
-    multipliers(first, first + count, gradient.row(a).transpose(), lambda.data());
-    const std::size_t weakest = std::size_t(std::min_element(lambda.begin(), lambda.begin() + long(count)) - lambda.begin());
-    for (std::size_t e = first; e < last; ++e) {
-      if (e - first == weakest && lambda[weakest] < 0) {
-        active_flag(active_[e].shape, a) = 0;
+    const VertexConstraints c = constraints_at(first, gradient);
+    const std::size_t weakest = std::size_t(std::min_element(c.lambda.begin(), c.lambda.begin() + long(c.count)) - c.lambda.begin());
+    for (std::size_t e = c.first; e < c.last; ++e) {
+      if (e - c.first == weakest && c.lambda[weakest] < 0) {
+        active_flag(active_[e].shape, free_index_[std::size_t(active_[e].vertex)]) = 0;
         changed = true;
       } else {
         kept.push_back(active_[e]);
       }
     }
-    first = last;
+    first = c.last;
   }
   active_.swap(kept);
+  return changed;
+}
+
+bool ProjectiveSolver::settle(const std::vector<Vec3>& x, Block& gradient) {
+  bool changed = activate();
+  refresh_active(x);  // the entered vertices' normals, for their multipliers
+  if (release(gradient)) changed = true, refresh_active(x);  // the bases without the freed
+  raw_gradient_ = gradient;
+  project(gradient);
   return changed;
 }
 
@@ -237,31 +244,27 @@ void ProjectiveSolver::project(Block& rows) const {
 
 void ProjectiveSolver::active_reactions(const std::vector<Vec3>& x, const Block& gradient) {
   const Scalar h = step_.step->h;
-  const ProjectiveContacts& c = *step_.step->contacts;
+  const ProjectiveContacts& contacts = *step_.step->contacts;
   for (std::size_t first = 0; first < active_.size();) {
-    std::size_t last = first + 1;
-    while (last < active_.size() && active_[last].vertex == active_[first].vertex) ++last;
-    const int v = active_[first].vertex;
     // Each constraint balances its multiplier's share of the gradient (the objective's force is
     // minus its gradient over h^2; an impulse is h times a force).
-    std::array<Scalar, 8> lambda{};
-    const std::size_t count = std::min<std::size_t>(last - first, lambda.size());
-    multipliers(first, first + count, gradient.row(free_index_[std::size_t(v)]).transpose(), lambda.data());
-    for (std::size_t i = 0; i < count; ++i) {
-      if (!(lambda[i] > 0)) continue;
-      const Scalar impulse = lambda[i] / h;
+    const VertexConstraints c = constraints_at(first, gradient);
+    const int v = active_[first].vertex;
+    for (std::size_t i = 0; i < c.count; ++i) {
+      if (!(c.lambda[i] > 0)) continue;
+      const Scalar impulse = c.lambda[i] / h;
       const ActiveContact& contact = active_[first + i];
       contact_impulse_[std::size_t(v)] += impulse;
       if (std::size_t(contact.shape) >= shapes_.size()) {  // a mesh contact's plane
-        const SolveContact& mesh = c.mesh[planes_[std::size_t(contact.shape) - shapes_.size()].contact];
+        const SolveContact& mesh = contacts.mesh[planes_[std::size_t(contact.shape) - shapes_.size()].contact];
         contact_work_ += impulse * mesh.normal.dot(mesh.surface_velocity);
         continue;
       }
       const PosedShape& shape = shapes_[std::size_t(contact.shape)];
       if (shape.obstacle->spec.motion.moves())
-        contact_work_ += impulse * contact.normal.dot(analytic_contact(shape, c.t_end, x[std::size_t(v)]).surface_velocity);
+        contact_work_ += impulse * contact.normal.dot(analytic_contact(shape, contacts.t_end, x[std::size_t(v)]).surface_velocity);
     }
-    first = last;
+    first = c.last;
   }
 }
 

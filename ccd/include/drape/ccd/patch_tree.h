@@ -116,7 +116,9 @@ class PatchTree {
   // The orphan sets, built once: the pairs of triangles sharing a vertex by their lowest
   // common node, and each node's tests of them (CSR: orphan_vf_start_[node] to [node + 1]).
   void build_orphans();
-  bool adjacent(std::int32_t i, std::int32_t j) const;  // order_ positions i and j share a vertex
+  // Whether a leaf pair (order_ positions i and j) is listed: kept by the moved restriction,
+  // boxes overlapping, and, with orphans, not sharing a corner.
+  bool lists(const Motion& motion, std::int32_t i, std::int32_t j) const;
   std::vector<VertexFacePair> orphan_vf_;
   std::vector<EdgeEdgePair> orphan_ee_;
   std::vector<std::int32_t> orphan_vf_start_, orphan_ee_start_;
