@@ -11,6 +11,7 @@ PACKAGES=(
   libcli11-dev         # command-line parsing and --help
   nlohmann-json3-dev   # JSON scenes and --json output
   libtbb-dev           # parallel narrow phase
+  libhwy-dev           # Google Highway: the CCD kernels written once for every SIMD instruction set
   libgtest-dev         # the test suite
   libbenchmark-dev     # micro-benchmarks
   libbullet-dev        # btDbvt broad phase (the -float64 libraries)

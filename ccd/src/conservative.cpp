@@ -13,7 +13,8 @@
 // contact is reported; a cubic that double precision cannot resolve (coplanar motion) is
 // searched in double only until the first undecided interval, and in long double from there.
 // The same algorithm serves both precisions.
-#include "problem.h"
+#include "methods.h"
+#include "root_refinement.h"
 
 namespace drape::ccd::detail {
 namespace {

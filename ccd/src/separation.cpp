@@ -2,8 +2,9 @@
 // the features' boxes over the whole step, or de Casteljau halving that locates the roots in
 // short sub-intervals and a separating axis over each, show the features apart there. ccd.md,
 // "The separation stage".
-#include "avx2.h"
-#include "problem.h"
+#include "separation.h"
+
+#include "kernels.h"
 
 namespace drape::ccd::detail {
 
@@ -55,64 +56,6 @@ Scalar gap_and_margin(const Query& q, Scalar gap) {
   return gap + PROJECTION_ERROR_FACTOR * UNIT_ROUNDOFF * max_abs_coordinate(q);
 }
 
-// The features' boxes over [lo, hi] more than need apart along x, y or z. With NEED_GIVEN
-// need is the caller's gap_and_margin of the query; otherwise it is computed from the gap
-// (passed in need) and returned there. Portable and AVX2 versions, the same decisions: the
-// same interpolated coordinates (start + t * motion, no FMA), exact minima and maxima.
-template <bool NEED_GIVEN>
-bool boxes_apart(QueryKind kind, const Query& q, Scalar lo, Scalar hi, Scalar& need) {
-  const int split = kind == QueryKind::VertexFace ? 1 : 2;
-  if (!NEED_GIVEN) need = gap_and_margin(q, need);
-  for (int k = 0; k < 3; ++k) {
-    Scalar p[4][2];
-    for (int i = 0; i < 4; ++i) {
-      const Scalar start = q.start[i][k], motion = q.end[i][k] - start;
-      p[i][0] = start + lo * motion;
-      p[i][1] = start + hi * motion;
-    }
-    if (ranges_apart(p, split, need)) return true;
-  }
-  return false;
-}
-
-#if DRAPE_X86_KERNELS
-// All three axes at once, a point's x, y, z in one register's lanes; one branch at the end
-// (which axis separates is random in a cloth step).
-template <bool NEED_GIVEN>
-__attribute__((target("avx2"))) bool boxes_apart_avx2(QueryKind kind, const Query& q, Scalar lo, Scalar hi,
-                                                      Scalar& need) {
-  const int split = kind == QueryKind::VertexFace ? 1 : 2;
-  const __m256d at_lo = _mm256_set1_pd(lo), at_hi = _mm256_set1_pd(hi);
-  __m256d point_lo[4], point_hi[4], largest = _mm256_setzero_pd();
-  for (int i = 0; i < 4; ++i) {
-    const __m256d start = load_start(q, i), end = load_end(q, i);
-    const __m256d motion = _mm256_sub_pd(end, start);
-    const __m256d x0 = _mm256_add_pd(start, _mm256_mul_pd(at_lo, motion));
-    const __m256d x1 = _mm256_add_pd(start, _mm256_mul_pd(at_hi, motion));
-    point_lo[i] = min4(x0, x1);
-    point_hi[i] = max4(x0, x1);
-    if (!NEED_GIVEN) largest = max4(largest, max4(abs4(start), abs4(end)));
-  }
-  // Point 0 is always the first feature's, point 3 the second's.
-  __m256d a_lo = point_lo[0], a_hi = point_hi[0], b_lo = point_lo[3], b_hi = point_hi[3];
-  for (int i = 1; i < 3; ++i) {
-    __m256d& lo_i = i < split ? a_lo : b_lo;
-    __m256d& hi_i = i < split ? a_hi : b_hi;
-    lo_i = min4(lo_i, point_lo[i]);
-    hi_i = max4(hi_i, point_hi[i]);
-  }
-  if (!NEED_GIVEN) {
-    alignas(32) double lanes[4];
-    _mm256_store_pd(lanes, largest);
-    need = need + PROJECTION_ERROR_FACTOR * UNIT_ROUNDOFF * std::max({lanes[0], lanes[1], lanes[2]});
-  }
-  const __m256d need4 = _mm256_set1_pd(need);
-  const __m256d apart = _mm256_or_pd(_mm256_cmp_pd(_mm256_sub_pd(b_lo, a_hi), need4, _CMP_GT_OQ),
-                                     _mm256_cmp_pd(_mm256_sub_pd(a_lo, b_hi), need4, _CMP_GT_OQ));
-  return (_mm256_movemask_pd(apart) & 0b111) != 0;
-}
-#endif  // DRAPE_X86_KERNELS
-
 // The axes from the features' shape, after the coordinate axes failed (a few percent of the
 // calls): out of line, so that the common path inlines into roots_apart.
 __attribute__((noinline)) bool shape_axes_apart(QueryKind kind, const Query& q, Scalar lo, Scalar hi, Scalar need) {
@@ -156,10 +99,7 @@ __attribute__((noinline)) bool shape_axes_apart(QueryKind kind, const Query& q, 
 // need: with NEED_GIVEN the query's gap_and_margin, else the gap (and gap_and_margin on return).
 template <bool NEED_GIVEN>
 inline bool coordinate_axes_apart_inline(QueryKind kind, const Query& q, Scalar lo, Scalar hi, Scalar& need) {
-#if DRAPE_X86_KERNELS
-  if (avx2_enabled()) return boxes_apart_avx2<NEED_GIVEN>(kind, q, lo, hi, need);
-#endif
-  return boxes_apart<NEED_GIVEN>(kind, q, lo, hi, need);
+  return one_query_boxes_apart(kind, q, lo, hi, NEED_GIVEN, need);
 }
 
 // apart_over with the query's gap_and_margin already known.
@@ -200,12 +140,14 @@ std::uint64_t kept_sub_intervals(const Bernstein3& b, Scalar margin, int depth) 
 bool roots_apart(QueryKind kind, const Query& q, const CoplanarityCubic& cubic, Scalar gap, int depth,
                  Scalar cubic_margin) {
   if (!stage_runs(cubic, depth)) return false;
+  const Scalar largest = max_abs_coordinate(q);
+  if (!(largest <= STAGE_COORDINATE_LIMIT)) return false;
   // The whole step first: features whose boxes stay apart over it are apart at every root,
   // wherever the cubic has them. Many pairs the broad phase lets through never come that near
   // (its boxes hold whole triangles, or features padded by the thickness), and end here
-  // without the tree of halvings.
-  Scalar need = gap;  // then the gap and the rounding margin, for every interval below
-  if (coordinate_axes_apart_inline<false>(kind, q, 0, 1, need)) return true;
+  // without the tree of halvings. need: the gap and the rounding margin, for every interval.
+  Scalar need = gap + PROJECTION_ERROR_FACTOR * UNIT_ROUNDOFF * largest;
+  if (coordinate_axes_apart_inline<true>(kind, q, 0, 1, need)) return true;
   return roots_apart_within(kind, q, cubic, need, depth, cubic_margin);
 }
 
@@ -233,6 +175,24 @@ bool roots_apart_within(QueryKind kind, const Query& q, const CoplanarityCubic& 
     kept &= past >= 64 ? 0 : (~std::uint64_t(0) << past);
   }
   return true;
+}
+
+// The portable box test (kernels.h's one_query_boxes_apart on targets without four lanes of
+// doubles): the same interpolated coordinates (start + t * motion, no FMA), exact minima and
+// maxima, so the same decisions and need.
+bool boxes_apart_scalar(QueryKind kind, const Query& q, Scalar lo, Scalar hi, bool need_given, Scalar& need) {
+  const int split = kind == QueryKind::VertexFace ? 1 : 2;
+  if (!need_given) need = gap_and_margin(q, need);
+  for (int k = 0; k < 3; ++k) {
+    Scalar p[4][2];
+    for (int i = 0; i < 4; ++i) {
+      const Scalar start = q.start[i][k], motion = q.end[i][k] - start;
+      p[i][0] = start + lo * motion;
+      p[i][1] = start + hi * motion;
+    }
+    if (ranges_apart(p, split, need)) return true;
+  }
+  return false;
 }
 
 }  // namespace drape::ccd::detail

@@ -3,7 +3,8 @@
 
 #include "drape/ccd/batch.h"
 #include "drape/ccd_eval/query_generator.h"
-#include "problem.h"
+#include "kernel_targets.h"
+#include "methods.h"
 
 using namespace drape;
 using namespace drape::ccd;
@@ -96,16 +97,14 @@ void check_batch_against_elementary_calls() {
 }  // namespace
 
 // Chunks of every length: a batch of n tests for n around the chunk size (64) and the SIMD
-// width (4), so that partial groups of four and partial chunks occur, every method, both
-// kernels, two thicknesses: every counter and every hit as the one-query calls give them.
+// widths (1 to 8), so that partial vectors and partial chunks occur, every method, every kernel
+// target, two thicknesses: every counter and every hit as the one-query calls give them.
 TEST(Batch, EveryChunkTailMatchesElementaryCalls) {
   const ClothLikeSet set = cloth_like_set(6, 9);
   const std::vector<VertexFacePair> all_vf = vertex_face_pairs(set);
   const std::vector<EdgeEdgePair> all_ee = edge_edge_pairs(set);
   std::size_t offset = 0;
-  // The kernels: the widest the machine has (AVX-512 or AVX2), AVX2 alone, the portable loop.
-  enum class Kernel { Widest, Avx2, Portable };
-  for (const Kernel kernel : {Kernel::Widest, Kernel::Avx2, Kernel::Portable})
+  kernel_testing::on_every_kernel_target([&] {
     for (const std::size_t n : {1, 2, 3, 4, 5, 7, 8, 9, 15, 63, 64, 65, 67, 130, 191}) {
       offset = (offset + 977) % (all_vf.size() - 200);  // a different stretch of tests each time
       const std::vector<VertexFacePair> vf(all_vf.begin() + offset, all_vf.begin() + offset + n);
@@ -114,34 +113,49 @@ TEST(Batch, EveryChunkTailMatchesElementaryCalls) {
       for (const Scalar thickness : {0.0, 0.01})
         for (Method method : ALL_METHODS) {
           SCOPED_TRACE(std::string(method_name(method)) + " n " + std::to_string(n) + " thickness " +
-                       std::to_string(thickness) + " kernel " + std::to_string(int(kernel)));
+                       std::to_string(thickness));
           Options options;
           options.method = method;
           options.thickness = thickness;
-          detail::portable_kernels = kernel == Kernel::Portable;
-          detail::avx2_only = kernel == Kernel::Avx2;
           expect_batch_matches_elementary_calls(input, options);
-          detail::portable_kernels = false;
-          detail::avx2_only = false;
         }
     }
+  });
 }
 
-// On this machine the AVX2 kernel where it has AVX2, and the portable one on every machine.
-TEST(Batch, MatchesElementaryCallsAndCounts) { check_batch_against_elementary_calls(); }
-
-// Where the machine has AVX-512, the AVX2 kernel too.
-TEST(Batch, Avx2KernelMatchesElementaryCallsAndCounts) {
-  if (!detail::cpu_has_avx512) GTEST_SKIP() << "no AVX-512 on this machine: the AVX2 kernel ran above";
-  detail::avx2_only = true;
-  check_batch_against_elementary_calls();
-  detail::avx2_only = false;
+// Tests far from the origin, around STAGE_COORDINATE_LIMIT: the batch's stage stops at the same
+// limit as the one-query calls', on every target.
+TEST(Batch, CoordinatesAroundTheStageLimitMatchElementaryCalls) {
+  std::vector<Vec3> start, end;
+  std::vector<VertexFacePair> vf;
+  for (const Scalar offset : {1e99, 1e101, 1e110}) {
+    const Scalar size = offset * 1e-8;
+    const std::int32_t first = std::int32_t(start.size());
+    start.push_back(Vec3(offset, offset, offset));
+    start.push_back(Vec3(offset + size, offset, offset));
+    start.push_back(Vec3(offset, offset + size, offset));
+    end.insert(end.end(), start.end() - 3, start.end());
+    for (const Scalar outside : {0.25, 8.0}) {  // a vertex crossing the plane inside and outside the triangle
+      vf.push_back({std::int32_t(start.size()), {first, first + 1, first + 2}});
+      start.push_back(Vec3(offset + outside * size, offset + outside * size, offset + size));
+      end.push_back(Vec3(offset + outside * size, offset + outside * size, offset - size));
+    }
+  }
+  const BatchInput input{start, end, vf, {}};
+  kernel_testing::on_every_kernel_target([&] {
+    for (Method method : {Method::Vincent, Method::Conservative}) {
+      SCOPED_TRACE(method_name(method));
+      Options options;
+      options.method = method;
+      const BatchOutput out = expect_batch_matches_elementary_calls(input, options);
+      EXPECT_EQ(out.counters.separated, 1u);  // the vertex outside the triangle within the limit
+    }
+  });
 }
 
-TEST(Batch, PortableKernelMatchesElementaryCallsAndCounts) {
-  detail::portable_kernels = true;
-  check_batch_against_elementary_calls();
-  detail::portable_kernels = false;
+// Every kernel target this machine runs, the portable one-lane code included.
+TEST(Batch, MatchesElementaryCallsAndCounts) {
+  kernel_testing::on_every_kernel_target([] { check_batch_against_elementary_calls(); });
 }
 
 // Features that become coplanar at mid-step a distance d apart along one coordinate axis, so

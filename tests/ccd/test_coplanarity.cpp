@@ -7,7 +7,8 @@
 
 #include "drape/ccd/coplanarity.h"
 #include "drape/ccd_eval/query_generator.h"
-#include "problem.h"
+#include "kernel_targets.h"
+#include "methods.h"
 
 using namespace drape;
 using namespace drape::ccd;
@@ -82,11 +83,10 @@ TEST(Coplanarity, ErrorBoundCoversTheRoundingAtLargeOffsets) {
   }
 }
 
-// The one-query entry points' cubic (AVX2 where this machine has it) against the reference
-// template, bit for bit: every family and scale of the generator, a cloth-like set, signed
-// zeros, and non-finite coordinates (NaN and infinities must come out the same way too).
+// The one-query entry points' cubic on every kernel target against the reference template, bit
+// for bit: every family and scale of the generator, a cloth-like set, signed zeros, and
+// non-finite coordinates (NaN and infinities must come out the same way too).
 TEST(Coplanarity, OneQueryKernelMatchesTheReferenceBitForBit) {
-  if (!detail::cpu_has_avx2) GTEST_SKIP() << "no AVX2 on this machine: query_cubic is coplanarity_cubic";
   std::vector<std::pair<QueryKind, Query>> queries;
   std::uint64_t seed = 11;
   for (QueryKind kind : {QueryKind::VertexFace, QueryKind::EdgeEdge}) {
@@ -113,17 +113,19 @@ TEST(Coplanarity, OneQueryKernelMatchesTheReferenceBitForBit) {
     return same;
   };
   // The cubic alone, and the filter's decision with it (the cubic written when not culled).
-  std::size_t differences = 0, decisions = 0, culled = 0;
-  for (const auto& [kind, q] : queries) {
-    const CoplanarityCubic reference = coplanarity_cubic(kind, q);
-    differences += !same_cubic(reference, detail::query_cubic(kind, q));  // AVX2: checked above
-    CoplanarityCubic fast;
-    const bool fast_culls = detail::query_culled(kind, q, fast);
-    decisions += fast_culls != filter_culls(reference) || (!fast_culls && !same_cubic(reference, fast));
-    culled += fast_culls;
-  }
-  EXPECT_EQ(differences, 0u) << "of " << queries.size();
-  EXPECT_EQ(decisions, 0u) << "of " << queries.size();
-  EXPECT_GT(culled, queries.size() / 10);             // both decisions occur
-  EXPECT_LT(culled, queries.size() - queries.size() / 10);
+  kernel_testing::on_every_kernel_target([&] {
+    std::size_t differences = 0, decisions = 0, culled = 0;
+    for (const auto& [kind, q] : queries) {
+      const CoplanarityCubic reference = coplanarity_cubic(kind, q);
+      differences += !same_cubic(reference, detail::query_cubic(kind, q));
+      CoplanarityCubic fast;
+      const bool fast_culls = detail::query_culled(kind, q, fast);
+      decisions += fast_culls != filter_culls(reference) || (!fast_culls && !same_cubic(reference, fast));
+      culled += fast_culls;
+    }
+    EXPECT_EQ(differences, 0u) << "of " << queries.size();
+    EXPECT_EQ(decisions, 0u) << "of " << queries.size();
+    EXPECT_GT(culled, queries.size() / 10);  // both decisions occur
+    EXPECT_LT(culled, queries.size() - queries.size() / 10);
+  });
 }

@@ -5,7 +5,7 @@
 #include <random>
 
 #include "drape/ccd/cubic_solver.h"
-#include "problem.h"
+#include "root_refinement.h"
 
 using namespace drape;
 using namespace drape::ccd;

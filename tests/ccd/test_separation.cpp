@@ -8,7 +8,8 @@
 
 #include "drape/ccd_eval/query_file.h"
 #include "drape/ccd_eval/query_generator.h"
-#include "problem.h"
+#include "kernel_targets.h"
+#include "methods.h"
 
 using namespace drape;
 using namespace drape::ccd;
@@ -53,33 +54,50 @@ TEST(Separation, AnAxisGapHoldsAtEveryTimeOfTheInterval) {
   EXPECT_GT(near, 10'000u);
 }
 
-TEST(Separation, PortableAndAvx2AxisTestsDecideAlike) {
-  // The AVX2 coordinate-axis test and the portable one, on the same queries and intervals,
-  // every family and scale: the same answers and the same margin.
-  if (!detail::cpu_has_avx2) GTEST_SKIP() << "no AVX2 on this machine: only the portable test runs";
+TEST(Separation, EveryKernelTargetsAxisTestDecidesAsThePortableOne) {
+  // The coordinate-axis test on every kernel target against the portable one-lane code, on the
+  // same queries and intervals, every family and scale: the same answers and the same margin.
+  struct Case {
+    QueryKind kind;
+    Query q;
+    Scalar lo, hi, gap;
+  };
+  std::vector<Case> cases;
   std::mt19937_64 rng(8);
   std::uniform_real_distribution<Scalar> unit(0, 1);
-  std::size_t apart = 0, differences = 0, checked = 0;
   for (QueryKind kind : {QueryKind::VertexFace, QueryKind::EdgeEdge})
     for (QueryFamily family : ALL_FAMILIES)
-      for (Scalar scale : {1e-8, 1.0, 1e8}) {
+      for (Scalar scale : {1e-8, 1.0, 1e8})
         for (const Query& q : generate_queries(family, kind, 1'000, 21 + int(family), scale)) {
           Scalar lo = unit(rng), hi = unit(rng);
           if (lo > hi) std::swap(lo, hi);
-          const Scalar gap = 0.05 * scale * unit(rng);
-          Scalar portable_need = 0, fast_need = 0;
-          detail::portable_kernels = true;
-          const bool portable = detail::coordinate_axes_apart(kind, q, lo, hi, gap, portable_need);
-          detail::portable_kernels = false;
-          const bool fast = detail::coordinate_axes_apart(kind, q, lo, hi, gap, fast_need);
-          ++checked;
-          apart += portable;
-          differences += portable != fast || portable_need != fast_need;
+          cases.push_back({kind, q, lo, hi, 0.05 * scale * unit(rng)});
         }
-      }
-  EXPECT_EQ(differences, 0u) << "of " << checked;
-  EXPECT_GT(apart, checked / 10);
-  EXPECT_LT(apart, checked - checked / 10);
+  const auto answers = [&](std::vector<bool>& apart, std::vector<Scalar>& need) {
+    for (const Case& c : cases) {
+      Scalar n = 0;
+      apart.push_back(detail::coordinate_axes_apart(c.kind, c.q, c.lo, c.hi, c.gap, n));
+      need.push_back(n);
+    }
+  };
+  std::vector<bool> portable;
+  std::vector<Scalar> portable_need;
+  detail::use_kernel_target(kernel_testing::portable_kernel_target());
+  answers(portable, portable_need);
+  detail::use_kernel_target(0);
+  kernel_testing::on_every_kernel_target([&] {
+    std::vector<bool> apart;
+    std::vector<Scalar> need;
+    answers(apart, need);
+    std::size_t differences = 0;
+    for (std::size_t i = 0; i < cases.size(); ++i)
+      differences += apart[i] != portable[i] || !(need[i] == portable_need[i]);
+    EXPECT_EQ(differences, 0u) << "of " << cases.size();
+  });
+  std::size_t apart = 0;
+  for (const bool a : portable) apart += a;
+  EXPECT_GT(apart, cases.size() / 10);
+  EXPECT_LT(apart, cases.size() - cases.size() / 10);
 }
 
 TEST(Separation, TreeOfHalvingsMatchesPlainSubdivision) {
@@ -235,14 +253,20 @@ TEST(Separation, FeaturesApartOverTheWholeStepNeedNoTree) {
   EXPECT_FALSE(detail::roots_apart(QueryKind::VertexFace, q, coplanarity_cubic(QueryKind::VertexFace, q), 0.0, 2));
 }
 
-TEST(Separation, PortableAndAvx2StagesDecideAlike) {
+TEST(Separation, EveryKernelTargetsStageDecidesAsThePortableOne) {
   // The whole stage (roots_apart: the whole step's boxes, the tree, the runs' boxes with the
-  // margin computed once) with the portable and the AVX2 box tests, on every family and scale,
-  // at two thicknesses, and with a NaN or an infinity in one coordinate (nothing is apart
-  // there: the two box tests read a NaN differently, so the stage must not reach them); and
-  // apart_over, whose coordinates must be finite, on the finite queries.
-  if (!detail::cpu_has_avx2) GTEST_SKIP() << "no AVX2 on this machine: only the portable test runs";
-  std::size_t checked = 0, finite_checked = 0, finite_apart = 0, differences = 0, nonfinite_apart = 0;
+  // margin computed once) on every kernel target against the portable one-lane code, on every
+  // family and scale, at two thicknesses, and with a NaN or an infinity in one coordinate
+  // (nothing is apart there); and apart_over, whose coordinates must be finite, on the finite
+  // queries.
+  struct Case {
+    QueryKind kind;
+    Query q;
+    CoplanarityCubic cubic;
+    Scalar gap;
+    bool finite;
+  };
+  std::vector<Case> cases;
   for (QueryKind kind : {QueryKind::VertexFace, QueryKind::EdgeEdge})
     for (QueryFamily family : ALL_FAMILIES)
       for (Scalar scale : {1e-8, 1.0, 1e8}) {
@@ -254,27 +278,59 @@ TEST(Separation, PortableAndAvx2StagesDecideAlike) {
                                              : (poisoned == 1 ? 1 : -1) * std::numeric_limits<Scalar>::infinity();
             (n % 2 ? q.start : q.end)[n % 4][n % 3] = bad;
           }
-          const CoplanarityCubic cubic = coplanarity_cubic(kind, q);
-          for (const Scalar gap : {0.0, 0.01 * scale}) {
-            detail::portable_kernels = true;
-            const bool portable = detail::roots_apart(kind, q, cubic, gap, 2, gap);
-            const bool portable_over = detail::apart_over(kind, q, 0.25, 0.5, gap);
-            detail::portable_kernels = false;
-            const bool fast = detail::roots_apart(kind, q, cubic, gap, 2, gap);
-            const bool fast_over = detail::apart_over(kind, q, 0.25, 0.5, gap);
-            ++checked;
-            differences += portable != fast;
-            if (poisoned < 3) {
-              nonfinite_apart += portable + fast;
-            } else {
-              ++finite_checked;
-              finite_apart += portable;
-              differences += portable_over != fast_over;
-            }
-          }
+          for (const Scalar gap : {0.0, 0.01 * scale}) cases.push_back({kind, q, coplanarity_cubic(kind, q), gap, poisoned >= 3});
         }
       }
-  EXPECT_EQ(differences, 0u) << "of " << checked;
-  EXPECT_EQ(nonfinite_apart, 0u);
-  EXPECT_GT(finite_apart, finite_checked / 10);  // the stage does separate here
+  const auto answers = [&](std::vector<bool>& stage, std::vector<bool>& over) {
+    for (const Case& c : cases) {
+      stage.push_back(detail::roots_apart(c.kind, c.q, c.cubic, c.gap, 2, c.gap));
+      over.push_back(c.finite && detail::apart_over(c.kind, c.q, 0.25, 0.5, c.gap));
+    }
+  };
+  std::vector<bool> portable, portable_over;
+  detail::use_kernel_target(kernel_testing::portable_kernel_target());
+  answers(portable, portable_over);
+  detail::use_kernel_target(0);
+  kernel_testing::on_every_kernel_target([&] {
+    std::vector<bool> stage, over;
+    answers(stage, over);
+    std::size_t differences = 0, nonfinite_apart = 0;
+    for (std::size_t i = 0; i < cases.size(); ++i) {
+      differences += stage[i] != portable[i] || over[i] != portable_over[i];
+      nonfinite_apart += !cases[i].finite && stage[i];
+    }
+    EXPECT_EQ(differences, 0u) << "of " << cases.size();
+    EXPECT_EQ(nonfinite_apart, 0u);
+  });
+  std::size_t finite = 0, finite_apart = 0;
+  for (std::size_t i = 0; i < cases.size(); ++i) finite += cases[i].finite, finite_apart += cases[i].finite && portable[i];
+  EXPECT_GT(finite_apart, finite / 10);  // the stage does separate here
+}
+
+// Coordinates beyond STAGE_COORDINATE_LIMIT with a finite cubic (small differences far from the
+// origin): the shape axes' projections could overflow there, so the stage answers nothing, on
+// every target, even for features whose boxes are far apart; within the limit it still does.
+TEST(Separation, CoordinatesBeyondTheLimitAreNeverSeparated) {
+  const auto query = [](Scalar offset, Scalar size) {
+    Query q;
+    // A triangle in the plane z = offset, and a vertex crossing that plane far outside it.
+    q.start[1] = Vec3(offset, offset, offset);
+    q.start[2] = Vec3(offset + size, offset, offset);
+    q.start[3] = Vec3(offset, offset + size, offset);
+    for (int i = 1; i < 4; ++i) q.end[i] = q.start[i];
+    q.start[0] = Vec3(offset + 8 * size, offset + 8 * size, offset + size);
+    q.end[0] = Vec3(offset + 8 * size, offset + 8 * size, offset - size);
+    return q;
+  };
+  kernel_testing::on_every_kernel_target([&] {
+    for (const Scalar offset : {1e101, 1e110}) {
+      const Query q = query(offset, offset * 1e-8);
+      const CoplanarityCubic cubic = coplanarity_cubic(QueryKind::VertexFace, q);
+      ASSERT_TRUE(detail::stage_runs(cubic, 2)) << offset;  // a finite cubic
+      EXPECT_FALSE(detail::stage_runs(q, cubic, 2)) << offset;
+      EXPECT_FALSE(detail::roots_apart(QueryKind::VertexFace, q, cubic, 0.0, 2)) << offset;
+    }
+    const Query q = query(1e99, 1e91);
+    EXPECT_TRUE(detail::roots_apart(QueryKind::VertexFace, q, coplanarity_cubic(QueryKind::VertexFace, q), 0.0, 2));
+  });
 }
