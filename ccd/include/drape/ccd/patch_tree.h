@@ -66,6 +66,9 @@ class PatchTree {
                                                                 Candidates* orphans = nullptr);
 
  private:
+  // Triangles a leaf holds at most: its self pairs are tested box against box.
+  static constexpr std::int32_t LEAF_TRIANGLES = 8;
+
   struct Node {
     std::int32_t right = -1;           // the right child's index (the left is the next node); -1 for a leaf
     std::int32_t first = 0, count = 0;  // the node's triangles: order_[first, first + count)
