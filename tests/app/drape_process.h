@@ -10,6 +10,8 @@
 #include <string>
 #include <vector>
 
+#include "../temp_root.h"
+
 namespace drape::testing {
 
 struct Outcome {
@@ -42,7 +44,7 @@ inline std::vector<std::string> lines(const std::filesystem::path& path) {
 /// A fresh path name under the system's temporary folder, unique to this test process
 /// (suite names the test file); its parent exists, the path itself does not.
 inline std::filesystem::path fresh_temp_path(const std::string& suite, const std::string& name) {
-  const auto dir = std::filesystem::temp_directory_path() / ("drape_" + suite + "_" + std::to_string(::getpid())) / name;
+  const auto dir = temp_root(suite) / name;
   std::filesystem::remove_all(dir);
   std::filesystem::create_directories(dir.parent_path());
   return dir;

@@ -9,6 +9,7 @@
 #include <set>
 
 #include "drape_process.h"
+#include "../temp_root.h"
 
 namespace fs = std::filesystem;
 
@@ -80,7 +81,7 @@ TEST(CcdCommand, TablePrintsEveryMethod) {
 }
 
 TEST(CcdCommand, BadInputExitsWithStatusTwo) {
-  const fs::path dir = fs::temp_directory_path() / ("drape_ccd_cmd_" + std::to_string(::getpid())) / "edge-edge";
+  const fs::path dir = drape::testing::temp_root("ccd_cmd") / "edge-edge";
   fs::create_directories(dir);
   std::ofstream(dir / "bad.csv") << "0,1,0,1,0,1,0\n0,1,0,1,0,1\n";
   const Outcome bad = run_drape("ccd " + (dir / "bad.csv").string());

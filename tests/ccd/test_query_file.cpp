@@ -6,6 +6,7 @@
 #include <random>
 
 #include "drape/ccd_eval/query_file.h"
+#include "../temp_root.h"
 
 using namespace drape;
 using namespace drape::ccd;
@@ -15,7 +16,7 @@ namespace {
 
 // A file under <tmp>/<kind folder>/name with the given text.
 fs::path write_file(const std::string& folder, const std::string& name, const std::string& text) {
-  const fs::path dir = fs::temp_directory_path() / ("drape_query_file_test_" + std::to_string(::getpid())) / folder;
+  const fs::path dir = drape::testing::temp_root("query_file_test") / folder;
   fs::create_directories(dir);
   const fs::path path = dir / name;
   std::ofstream(path) << text;

@@ -11,6 +11,7 @@
 
 #include "drape/core/model.h"
 #include "drape/core/run.h"
+#include "../temp_root.h"
 
 using namespace drape;
 namespace fs = std::filesystem;
@@ -27,7 +28,7 @@ struct Ran {
 
 Ran run(const Model& model, const std::string& name, int frames = 0) {
   RunSettings settings;
-  settings.out = fs::temp_directory_path() / ("drape_energy_" + std::to_string(::getpid())) / name;
+  settings.out = drape::testing::temp_root("energy") / name;
   fs::remove_all(settings.out);
   settings.frames = frames > 0 ? frames : model.scene.frames;
   settings.write_meshes = false;

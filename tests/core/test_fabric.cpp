@@ -12,6 +12,7 @@
 #include <unistd.h>
 
 #include "drape/core/integrator.h"
+#include "../temp_root.h"
 
 using namespace drape;
 
@@ -92,7 +93,7 @@ TEST(Fabric, AnEquilateralMeshIsAnIsotropicSheet) {
   // metre, and a shear angle g (3 T / 8) g^2 / 2, to 1e-5 at strains of 1e-6 (exact for each
   // triangle to second order; boundary edges have their one triangle's share).
   namespace fs = std::filesystem;
-  const fs::path dir = fs::temp_directory_path() / ("drape_fabric_" + std::to_string(::getpid()));
+  const fs::path dir = drape::testing::temp_root("fabric");
   fs::create_directories(dir);
   const int columns = 12, rows = 6;
   const Scalar side = 0.05, height = side * std::sqrt(3.0) / 2;

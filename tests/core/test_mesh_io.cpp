@@ -8,12 +8,13 @@
 #include "drape/core/mesh_io.h"
 #include "drape/core/model.h"
 #include "drape/core/run.h"
+#include "../temp_root.h"
 
 using namespace drape;
 namespace fs = std::filesystem;
 
 TEST(MeshIo, RoundTripsObjAndPly) {
-  const fs::path dir = fs::temp_directory_path() / ("drape_mesh_io_" + std::to_string(::getpid()));
+  const fs::path dir = drape::testing::temp_root("mesh_io");
   fs::create_directories(dir);
   const GridMesh grid = make_grid({Vec2(2, 1), {6, 3}, GridDiagonals::Alternate});
   for (const std::string format : {"obj", "ply", "stl"}) {
@@ -53,7 +54,7 @@ TEST(Mesh, TopologyOfAGrid) {
 }
 
 TEST(MeshIo, FramesMustMatchTheMeshAndBeFinite) {
-  const fs::path dir = fs::temp_directory_path() / ("drape_mesh_io_" + std::to_string(::getpid()));
+  const fs::path dir = drape::testing::temp_root("mesh_io");
   fs::create_directories(dir);
   const GridMesh grid = make_grid({Vec2(1, 1), {2, 2}, GridDiagonals::Alternate});
   const fs::path good = dir / "frame_good.obj";
@@ -91,7 +92,7 @@ TEST(MeshIo, FramesMustMatchTheMeshAndBeFinite) {
 }
 
 TEST(MeshIo, NonFiniteVerticesAreNotWelded) {
-  const fs::path dir = fs::temp_directory_path() / ("drape_mesh_io_" + std::to_string(::getpid()));
+  const fs::path dir = drape::testing::temp_root("mesh_io");
   fs::create_directories(dir);
   const fs::path path = dir / "nan.obj";
   std::ofstream(path) << "v 0 0 0\nv 1 0 0\nv nan 0 0\nf 1 2 3\n";
@@ -104,7 +105,7 @@ TEST(MeshIo, NonFiniteVerticesAreNotWelded) {
 // Frames keep double precision: a cloth a thousand kilometres from the origin, where single
 // precision rounds to 6 cm, reads back bit for bit from the frame a run wrote.
 TEST(MeshIo, AFrameFarFromTheOriginReadsBackBitForBit) {
-  const fs::path dir = fs::temp_directory_path() / ("drape_mesh_io_far_" + std::to_string(::getpid()));
+  const fs::path dir = drape::testing::temp_root("mesh_io_far");
   fs::remove_all(dir);
   const Model model = build_model(parse_scene(
       R"({"frames": 1, "cloths": [{"grid": {"size": [1, 1], "resolution": [7, 5]},

@@ -7,6 +7,7 @@
 
 #include "drape/core/model.h"
 #include "drape/core/scene.h"
+#include "../temp_root.h"
 
 using namespace drape;
 namespace fs = std::filesystem;
@@ -25,7 +26,7 @@ std::string error_of(const std::string& text) {
 }
 
 fs::path temp_dir() {
-  const fs::path dir = fs::temp_directory_path() / ("drape_scene_test_" + std::to_string(::getpid()));
+  const fs::path dir = drape::testing::temp_root("scene_test");
   fs::create_directories(dir);
   return dir;
 }

@@ -8,6 +8,7 @@
 #include <map>
 
 #include "drape/core/stats_compare.h"
+#include "../temp_root.h"
 
 using namespace drape;
 namespace fs = std::filesystem;
@@ -15,7 +16,7 @@ namespace fs = std::filesystem;
 namespace {
 
 fs::path write(const std::string& name, const std::string& text) {
-  const fs::path dir = fs::temp_directory_path() / ("drape_stats_" + std::to_string(::getpid()));
+  const fs::path dir = drape::testing::temp_root("stats");
   fs::create_directories(dir);
   std::ofstream(dir / name) << text;
   return dir / name;

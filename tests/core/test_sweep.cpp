@@ -8,6 +8,7 @@
 #include <filesystem>
 
 #include "drape/core/sweep.h"
+#include "../temp_root.h"
 
 using namespace drape;
 
@@ -101,7 +102,7 @@ TEST(Sweep, RunsAreMeasuredAgainstTheReference) {
   plan.reference = reference;
   plan.settings = {reference, coarse};
   plan.frames = 3;
-  plan.out = std::filesystem::temp_directory_path() / ("drape_sweep_test_" + std::to_string(::getpid()));
+  plan.out = drape::testing::temp_root("sweep_test");
   std::filesystem::remove_all(plan.out);
   const std::atomic<bool> go{false}, stop{true};
   // Interrupted: nothing kept.
