@@ -1,4 +1,4 @@
-// drape sweep: a scene over a grid of accuracy settings against a reference run (core/sweep.h).
+// drape sweep: a scene over a grid of accuracy settings against a reference run (sweep/sweep.h).
 #include <algorithm>
 #include <atomic>
 #include <csignal>
@@ -6,7 +6,7 @@
 #include <iostream>
 
 #include "commands.h"
-#include "drape/core/sweep.h"
+#include "drape/sweep/sweep.h"
 #include "ranks.h"
 
 namespace drape::app {

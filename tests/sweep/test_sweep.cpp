@@ -7,7 +7,7 @@
 #include <atomic>
 #include <filesystem>
 
-#include "drape/core/sweep.h"
+#include "drape/sweep/sweep.h"
 #include "../temp_root.h"
 
 using namespace drape;

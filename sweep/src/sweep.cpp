@@ -1,4 +1,4 @@
-#include "drape/core/sweep.h"
+#include "drape/sweep/sweep.h"
 
 #include <sys/wait.h>
 
