@@ -68,7 +68,14 @@ struct Integrator::Workspace {
   std::vector<SolveContact> contacts;
   std::vector<std::array<std::array<std::array<int, 3>, 3>, 3>> contact_blocks;  // [contact][i][j]: block (vertex i, vertex j)
   std::vector<Scalar> contact_holds, contact_impulses;
-  std::vector<Scalar> assembled;  // the matrix's values before the contacts' penalties and friction
+  std::vector<char> contact_held;  // per contact: held in the solve's last matrix (not released)
+  std::vector<Scalar> assembled;   // the matrix's values before the contacts' penalties and friction
+  struct FrictionBlock {
+    int vertex;
+    Mat3 block;
+    bool analytic;  // against a sphere or plane
+  };
+  std::vector<FrictionBlock> friction_blocks;  // the solve's friction terms
   std::vector<Scalar> scale;  // per free vertex: its diagonal block's largest entry before penalties
   Scalar contact_work = 0;           // J: what the held contacts did at moving obstacles in the last solve
   std::vector<Scalar> normal_force;  // per vertex, N: what its contacts pushed with in the last solve
