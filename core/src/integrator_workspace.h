@@ -68,7 +68,7 @@ struct Integrator::Workspace {
   std::vector<SolveContact> contacts;
   std::vector<std::array<std::array<std::array<int, 3>, 3>, 3>> contact_blocks;  // [contact][i][j]: block (vertex i, vertex j)
   std::vector<Scalar> contact_holds, contact_impulses;
-  std::vector<char> contact_held;  // per contact: held in the solve's last matrix (not released)
+  std::vector<char> contact_held;  // per contact: neither released nor found pulling in the solve
   std::vector<Scalar> assembled;   // the matrix's values before the contacts' penalties and friction
   struct FrictionBlock {
     int vertex;

@@ -96,7 +96,8 @@ class Integrator {
   // With again, solves for that right-hand side with the last solve's matrix instead.
   bool solve(StepReport& report, const std::string& failure, const VectorX* again = nullptr);
   // The collision response spread through the step: the system as the solve assembled it
-  // (without the contacts' penalties and friction), solved with each held vertex (those the
+  // (without mesh contacts' penalties and friction; with the solve's held sphere and plane
+  // contacts and their friction on vertices not held here), solved with each held vertex (those the
   // response moved by more than a negligible distance) kept by a penalty at its new motion,
   // then (the same factorisation) at its new velocity, from the solve's velocities (solved);
   // motion and velocities of the others receive the results, and report says why when the
