@@ -40,9 +40,12 @@ BatchCounters& BatchCounters::operator+=(const BatchCounters& other) {
   return *this;
 }
 
-VertexFaceQuery gather(const BatchInput& input, const VertexFacePair& pair) {
-  VertexFaceQuery q;
-  const std::array<std::int32_t, 4> index{pair.vertex, pair.face[0], pair.face[1], pair.face[2]};
+namespace {
+
+template <class QueryType, class Pair>
+QueryType gather_points(const BatchInput& input, const Pair& pair) {
+  QueryType q;
+  const std::array<std::int32_t, 4> index = detail::points(pair);
   for (int i = 0; i < 4; ++i) {
     q.start[i] = input.start[index[i]];
     q.end[i] = input.end[index[i]];
@@ -50,14 +53,14 @@ VertexFaceQuery gather(const BatchInput& input, const VertexFacePair& pair) {
   return q;
 }
 
+}  // namespace
+
+VertexFaceQuery gather(const BatchInput& input, const VertexFacePair& pair) {
+  return gather_points<VertexFaceQuery>(input, pair);
+}
+
 EdgeEdgeQuery gather(const BatchInput& input, const EdgeEdgePair& pair) {
-  EdgeEdgeQuery q;
-  const std::array<std::int32_t, 4> index{pair.edge_a[0], pair.edge_a[1], pair.edge_b[0], pair.edge_b[1]};
-  for (int i = 0; i < 4; ++i) {
-    q.start[i] = input.start[index[i]];
-    q.end[i] = input.end[index[i]];
-  }
-  return q;
+  return gather_points<EdgeEdgeQuery>(input, pair);
 }
 
 namespace {

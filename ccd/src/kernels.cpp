@@ -89,8 +89,6 @@ HWY_INLINE hn::Vec<DB> LoadBlocks(DB d, const double* const* p) {
 }
 #endif
 
-std::array<std::int32_t, 4> points(const VertexFacePair& p) { return {p.vertex, p.face[0], p.face[1], p.face[2]}; }
-std::array<std::int32_t, 4> points(const EdgeEdgePair& p) { return {p.edge_a[0], p.edge_a[1], p.edge_b[0], p.edge_b[1]}; }
 
 // Point `point` (in the pair's order) of N tests, a test per lane: each test's (x, y) and
 // (y, z) as 128-bit loads, the even and the odd tests interleaved; at width one, x, y and z.

@@ -5,6 +5,7 @@
 // kernel gives the scalar code's bits and decisions on every target: the same operations in
 // the same order, no FMA, min and max as std::min and std::max (NaN and signed zeros included).
 
+#include <array>
 #include <cstdint>
 #include <string>
 #include <vector>
@@ -13,6 +14,12 @@
 #include "drape/ccd/coplanarity.h"
 
 namespace drape::ccd::detail {
+
+/// A pair's four points, as the one-query functions take them (Query::start and end).
+inline std::array<std::int32_t, 4> points(const VertexFacePair& p) { return {p.vertex, p.face[0], p.face[1], p.face[2]}; }
+inline std::array<std::int32_t, 4> points(const EdgeEdgePair& p) {
+  return {p.edge_a[0], p.edge_a[1], p.edge_b[0], p.edge_b[1]};
+}
 
 /// Tests whose cubics a batch computes together, a test per SIMD lane.
 constexpr std::size_t CHUNK = 64;

@@ -111,12 +111,10 @@ bool Integrator::solve_linearised(State& state, const std::vector<Vec3>& pinned_
       if (!which[k]) continue;
       const SolveContact& c = w.contacts[k];
       const Scalar hold = sign * w.contact_holds[k];
-      const Mat3 nn = c.normal * c.normal.transpose();
       const Scalar missing = c.target - normal_velocity(c, nullptr);
-      for (int i = 0; i < c.count; ++i) {
-        for (int j = 0; j < c.count; ++j) w.add_block(w.contact_blocks[k][i][j], hold * c.weight[i] * c.weight[j] * nn);
+      w.add_contact_hold(k, hold);
+      for (int i = 0; i < c.count; ++i)
         w.rhs.segment<3>(3 * w.free_index[std::size_t(c.vertex[i])]) += hold * c.weight[i] * missing * c.normal;
-      }
     }
   };
   // Coulomb friction of the contacts, in the solve, from the normal force each vertex's
@@ -252,11 +250,7 @@ void Integrator::spread_response(const std::vector<Vec3>& solved, const std::vec
     const SolveContact& c = w.contacts[k];
     bool kept = c.analytic && w.contact_held[k];
     for (int i = 0; i < c.count; ++i) kept = kept && !held[std::size_t(c.vertex[i])];
-    if (!kept) continue;
-    const Mat3 nn = c.normal * c.normal.transpose();
-    for (int i = 0; i < c.count; ++i)
-      for (int j = 0; j < c.count; ++j)
-        w.add_block(w.contact_blocks[k][i][j], w.contact_holds[k] * c.weight[i] * c.weight[j] * nn);
+    if (kept) w.add_contact_hold(k, w.contact_holds[k]);
   }
   for (const auto& f : w.friction_blocks)
     if (f.analytic && !held[std::size_t(f.vertex)]) w.add_block(w.diagonal[w.free_index[std::size_t(f.vertex)]], f.block);

@@ -104,6 +104,14 @@ struct Integrator::Workspace {
     for (int c = 0; c < 3; ++c)
       for (int r = 0; r < 3; ++r) values[offsets[c] + r] += value(r, c);
   }
+  // Contact k's penalty along its normal, hold times its weights' outer product, into the
+  // matrix (the solve holds its contacts with it; the response's spread keeps some of them).
+  void add_contact_hold(std::size_t k, Scalar hold) {
+    const SolveContact& c = contacts[k];
+    const Mat3 nn = c.normal * c.normal.transpose();
+    for (int i = 0; i < c.count; ++i)
+      for (int j = 0; j < c.count; ++j) add_block(contact_blocks[k][i][j], hold * c.weight[i] * c.weight[j] * nn);
+  }
 };
 
 // Each vertex's contact of largest weight among contacts (-1: none), for its friction.
