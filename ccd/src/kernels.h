@@ -1,6 +1,7 @@
 #pragma once
 // Internal to ccd/: the SIMD kernels of the filter and its separation stage, written once with
-// Google Highway (kernels.cpp) and compiled for every instruction set Highway targets here
+// Google Highway (kernels_batch.cpp, kernels_one_query.cpp, their lane helpers in lanes-inl.h)
+// and compiled for every instruction set Highway targets here
 // (its portable one-lane code, SSE4, AVX2, AVX-512), the best one chosen at run time. Every
 // kernel gives the scalar code's bits and decisions on every target: the same operations in
 // the same order, no FMA, min and max as std::min and std::max (NaN and signed zeros included).

@@ -1,5 +1,5 @@
-// The SIMD kernels' helpers (ccd/src/kernels.cpp), on every target this machine runs: each is
-// the scalar operation it stands for, bit for bit, NaN, signed zeros and infinities included.
+// The SIMD kernels' helpers (ccd/src/lanes-inl.h, kernels_batch.cpp), on every target this
+// machine runs: each is the scalar operation it stands for, bit for bit, NaN, signed zeros and infinities included.
 #include <gtest/gtest.h>
 
 #include <cmath>

@@ -1,15 +1,12 @@
-// The SIMD kernels (kernels.h), written once against Google Highway: foreach_target.h compiles
-// this file once per instruction set, HWY_EXPORT tables them and HWY_DYNAMIC_DISPATCH calls the
-// best one the machine runs. Batch kernels put a test in each lane, so the same source runs 1
-// (Highway's portable HWY_SCALAR), 2 (SSE4, or the portable EMU128 of newer compilers), 4 (AVX2)
-// or 8 (AVX-512) tests at a time; the one-query kernels put a point's coordinates in the lanes of
-// a four-lane vector on x86 targets that have one.
-//
-// Every operation is the scalar code's on the same operands in the same order (coplanarity.h,
-// conservative.cpp, separation.cpp), so every target gives the same bits and decisions:
-// -ffp-contract=off and no MulAdd, min and max through StdMin and StdMax below.
+// The batch kernels: a chunk's cubics and the filter's decisions, and the separation stage, a
+// test per lane, so the same source runs 1 (Highway's portable HWY_SCALAR), 2 (SSE4, or the
+// portable EMU128 of newer compilers), 4 (AVX2) or 8 (AVX-512) tests at a time.
+// Written once against Google Highway: foreach_target.h compiles this file once per instruction
+// set, HWY_EXPORT tables the kernels and HWY_DYNAMIC_DISPATCH calls the best one the machine runs
+// (kernels.h). The lane helpers and the rule that every target gives the scalar code's bits are in
+// lanes-inl.h.
 #undef HWY_TARGET_INCLUDE
-#define HWY_TARGET_INCLUDE "kernels.cpp"
+#define HWY_TARGET_INCLUDE "kernels_batch.cpp"
 #include <hwy/foreach_target.h>  // IWYU pragma: keep
 #include <hwy/highway.h>
 
@@ -19,122 +16,12 @@
 #include <limits>
 
 #include "kernels.h"
+#include "lanes-inl.h"
 #include "separation.h"
 
 HWY_BEFORE_NAMESPACE();
 namespace drape::ccd::detail::HWY_NAMESPACE {
 namespace hn = hwy::HWY_NAMESPACE;
-
-using D = hn::CappedTag<double, 8>;  // a chunk's decisions are bits of a byte per vector
-using V = hn::Vec<D>;
-using M = hn::Mask<D>;
-constexpr std::size_t N = hn::MaxLanes(D());
-static_assert(N >= 1 && N <= 8 && CHUNK % N == 0, "a chunk holds whole vectors; lane bits fit a byte");
-
-// std::max(a, b) and std::min(a, b) lane by lane, NaN and signed zeros included: b where
-// a < b (b < a), else a. On x86, maxpd(x, y) is x > y ? x : y, so with the operands swapped
-// it is exactly that; Highway's portable Max returns the other operand for a NaN, so there
-// the comparison is written out.
-#if HWY_ARCH_X86 && HWY_TARGET != HWY_EMU128 && HWY_TARGET != HWY_SCALAR
-template <class Vec>
-HWY_INLINE Vec StdMax(Vec a, Vec b) { return hn::Max(b, a); }
-template <class Vec>
-HWY_INLINE Vec StdMin(Vec a, Vec b) { return hn::Min(b, a); }
-#else
-template <class Vec>
-HWY_INLINE Vec StdMax(Vec a, Vec b) { return hn::IfThenElse(hn::Lt(a, b), b, a); }
-template <class Vec>
-HWY_INLINE Vec StdMin(Vec a, Vec b) { return hn::IfThenElse(hn::Lt(b, a), b, a); }
-#endif
-
-// The lane bits of a mask, lane 0 lowest.
-template <class DM, class Mask>
-HWY_INLINE std::uint64_t Bits(DM d, Mask m) {
-  std::uint8_t bits[8] = {};
-  hn::StoreMaskBits(d, m, bits);
-  return bits[0];
-}
-
-// Three coordinates, a test per lane.
-struct Lanes3 {
-  V x, y, z;
-};
-
-HWY_INLINE Lanes3 operator-(const Lanes3& a, const Lanes3& b) { return {a.x - b.x, a.y - b.y, a.z - b.z}; }
-
-HWY_INLINE Lanes3 Cross(const Lanes3& u, const Lanes3& v) {
-  return {u.y * v.z - u.z * v.y, u.z * v.x - u.x * v.z, u.x * v.y - u.y * v.x};
-}
-
-HWY_INLINE V Dot(const Lanes3& u, const Lanes3& w) { return (u.x * w.x + u.y * w.y) + u.z * w.z; }
-
-HWY_INLINE V Norm1(const Lanes3& u) { return (hn::Abs(u.x) + hn::Abs(u.y)) + hn::Abs(u.z); }
-
-// std::max of the 1-norms at the two ends of the step.
-HWY_INLINE V LargerNorm1(const Lanes3& s, const Lanes3& e) { return StdMax(Norm1(s), Norm1(e)); }
-
-HWY_INLINE V Norm(const Lanes3& u) { return hn::Sqrt((u.x * u.x + u.y * u.y) + u.z * u.z); }
-
-#if HWY_TARGET != HWY_SCALAR
-// A vector of doubles whose 128-bit block k is the two doubles at p[k] (a unaligned load each).
-template <class DB>
-HWY_INLINE hn::Vec<DB> LoadBlocks(DB d, const double* const* p) {
-  if constexpr (hn::MaxLanes(DB()) <= 2) {
-    return hn::LoadU(d, p[0]);
-  } else {
-    const hn::Half<DB> half;
-    constexpr std::size_t blocks = hn::MaxLanes(DB()) / 4;  // in each half
-    return hn::Combine(d, LoadBlocks(half, p + blocks), LoadBlocks(half, p));
-  }
-}
-#endif
-
-
-// Point `point` (in the pair's order) of N tests, a test per lane: each test's (x, y) and
-// (y, z) as 128-bit loads, the even and the odd tests interleaved; at width one, x, y and z.
-template <class Pair>
-HWY_INLINE Lanes3 LoadPoint(const Vec3* base, const Pair* const (&pair)[N], int point) {
-  const D d;
-#if HWY_TARGET == HWY_SCALAR
-  const double* p = base[points(*pair[0])[point]].data();
-  return {hn::LoadU(d, p), hn::LoadU(d, p + 1), hn::LoadU(d, p + 2)};
-#else
-  const double *xy_even[N / 2], *xy_odd[N / 2], *yz_even[N / 2], *yz_odd[N / 2];
-  for (std::size_t j = 0; j < N / 2; ++j) {
-    xy_even[j] = base[points(*pair[2 * j])[point]].data();
-    xy_odd[j] = base[points(*pair[2 * j + 1])[point]].data();
-    yz_even[j] = xy_even[j] + 1;
-    yz_odd[j] = xy_odd[j] + 1;
-  }
-  const V xy0 = LoadBlocks(d, xy_even), xy1 = LoadBlocks(d, xy_odd);
-  const V yz0 = LoadBlocks(d, yz_even), yz1 = LoadBlocks(d, yz_odd);
-  return {hn::InterleaveLower(d, xy0, xy1), hn::InterleaveLower(d, yz0, yz1), hn::InterleaveUpper(d, yz0, yz1)};
-#endif
-}
-
-// certainly_nonzero(b, margin) lane by lane: every coefficient above margin, or every one
-// below -margin.
-HWY_INLINE M CertainlyNonzero(const V (&b)[4], V margin) {
-  const V minus = hn::Neg(margin);
-  const M above = hn::And(hn::And(hn::Gt(b[0], margin), hn::Gt(b[1], margin)),
-                          hn::And(hn::Gt(b[2], margin), hn::Gt(b[3], margin)));
-  const M below = hn::And(hn::And(hn::Lt(b[0], minus), hn::Lt(b[1], minus)),
-                          hn::And(hn::Lt(b[2], minus), hn::Lt(b[3], minus)));
-  return hn::Or(above, below);
-}
-
-// filter_culls lane by lane: resolved (not cubic_poorly_resolved, also returned), one strict
-// sign, both ends clear of the error.
-HWY_INLINE M FilterCulls(V k0, V k1, V k2, V k3, V e, M& resolved) {
-  const D d;
-  // max_abs: std::max({|k0|, |k1|, |k2|, |k3|}), left to right (the order matters for a NaN).
-  const V largest = StdMax(StdMax(StdMax(hn::Abs(k0), hn::Abs(k1)), hn::Abs(k2)), hn::Abs(k3));
-  const V lo = StdMin(StdMin(k0, k1), StdMin(k2, k3)), hi = StdMax(StdMax(k0, k1), StdMax(k2, k3));
-  resolved = hn::Not(hn::Le(largest, hn::Set(d, POORLY_RESOLVED_RATIO) * e));
-  const M one_sign = hn::Or(hn::Gt(lo, hn::Zero(d)), hn::Lt(hi, hn::Zero(d)));
-  const M ends_clear = hn::Gt(StdMin(hn::Abs(k0), hn::Abs(k3)), e);
-  return hn::And(hn::And(resolved, one_sign), ends_clear);
-}
 
 // ---------------------------------------------------------------------------------------
 // The cubics of a chunk (coplanarity_cubic_in and filter_culls, and with APART the
@@ -496,149 +383,6 @@ StageBits StageEdgeEdge(const BatchInput& input, const EdgeEdgePair* pairs, cons
                  : Stage<QueryKind::EdgeEdge, false>(input, pairs, left, count, gap, contact_tolerance, depth);
 }
 
-// ---------------------------------------------------------------------------------------
-// One query, a point's x, y, z in lanes 0-2 of a four-lane vector (lane 3 never decides).
-// Targets with fewer lanes of doubles run the scalar code (DRAPE_COORDINATE_LANES 0).
-
-#undef DRAPE_COORDINATE_LANES
-#if HWY_ARCH_X86 && HWY_TARGET <= HWY_AVX2  // AVX2 and the AVX-512 targets (lower is wider)
-#define DRAPE_COORDINATE_LANES 1
-using D4 = hn::CappedTag<double, 4>;
-static_assert(hn::MaxLanes(D4()) == 4, "four lanes of doubles");
-#else
-#define DRAPE_COORDINATE_LANES 0
-#endif
-
-#if DRAPE_COORDINATE_LANES
-// Point i of a query at the start or the end of the step: one four-double load where another
-// point of the query follows (lane 3 its x), the last end point with a zero after it.
-static_assert(sizeof(Vec3) == 3 * sizeof(double) && sizeof(Query) == 8 * sizeof(Vec3),
-              "LoadStart and LoadEnd read a query's points as 8 consecutive packed Vec3");
-HWY_INLINE hn::Vec<D4> LoadStart(const Query& q, int i) { return hn::LoadU(D4(), q.start[i].data()); }
-HWY_INLINE hn::Vec<D4> LoadEnd(const Query& q, int i) {
-  if (i < 3) return hn::LoadU(D4(), q.end[i].data());
-  // (x, y) and (y, z) shifted to (z, 0): two loads, no store (a stored array read back as a
-  // vector stalls store forwarding).
-  const hn::Half<D4> half;
-  const double* p = q.end[3].data();
-  return hn::Combine(D4(), hn::ShiftRightLanes<1>(half, hn::LoadU(half, p + 1)), hn::LoadU(half, p));
-}
-
-// A lane permutation of a four-lane vector.
-HWY_INLINE hn::Vec<D4> Permute(hn::Vec<D4> v, const std::int64_t (&index)[4]) {
-  const D4 d;
-  const hn::RebindToSigned<D4> di;
-  return hn::TableLookupLanes(v, hn::IndicesFromVec(d, hn::LoadU(di, index)));
-}
-
-// Lane i of the result: (p_i[0] + p_i[1]) + p_i[2], the scalar code's order of a 3-term sum.
-HWY_INLINE hn::Vec<D4> LaneSums(hn::Vec<D4> p0, hn::Vec<D4> p1, hn::Vec<D4> p2, hn::Vec<D4> p3) {
-  const D4 d;
-  const auto t0 = hn::InterleaveLower(d, p0, p1), t1 = hn::InterleaveUpper(d, p0, p1);
-  const auto t2 = hn::InterleaveLower(d, p2, p3), t3 = hn::InterleaveUpper(d, p2, p3);
-  const auto x = hn::ConcatLowerLower(d, t2, t0), y = hn::ConcatLowerLower(d, t3, t1);
-  const auto z = hn::ConcatUpperUpper(d, t2, t0);
-  return (x + y) + z;
-}
-#endif
-
-template <QueryKind kind>
-HWY_INLINE bool CubicOfQuery(const Query& query, bool cull, CoplanarityCubic& out) {
-#if !DRAPE_COORDINATE_LANES
-  out = coplanarity_cubic_in<Scalar>(kind, query);
-  return cull && filter_culls(out);
-#else
-  {
-    const D4 d;
-    using V4 = hn::Vec<D4>;
-    constexpr std::array<int, 4> order = coplanarity_order(kind);
-    const V4 x1s = LoadStart(query, order[0]), x1e = LoadEnd(query, order[0]);
-    const V4 A0 = LoadStart(query, order[1]) - x1s, A1 = LoadEnd(query, order[1]) - x1e;
-    const V4 B0 = LoadStart(query, order[2]) - x1s, B1 = LoadEnd(query, order[2]) - x1e;
-    const V4 C0 = LoadStart(query, order[3]) - x1s, C1 = LoadEnd(query, order[3]) - x1e;
-    // (u1, u2, u0) and (u2, u0, u1): u x v = yzx(u) zxy(v) - zxy(u) yzx(v), lane by lane.
-    static constexpr std::int64_t yzx[4] = {1, 2, 0, 3}, zxy[4] = {2, 0, 1, 3};
-    const V4 B0yzx = Permute(B0, yzx), B0zxy = Permute(B0, zxy), B1yzx = Permute(B1, yzx), B1zxy = Permute(B1, zxy);
-    const V4 C0yzx = Permute(C0, yzx), C0zxy = Permute(C0, zxy), C1yzx = Permute(C1, yzx), C1zxy = Permute(C1, zxy);
-    const V4 B0C0 = B0yzx * C0zxy - B0zxy * C0yzx, B1C0 = B1yzx * C0zxy - B1zxy * C0yzx;
-    const V4 B0C1 = B0yzx * C1zxy - B0zxy * C1yzx, B1C1 = B1yzx * C1zxy - B1zxy * C1yzx;
-    // first: [A0 B0 C0], [A1 B0 C0], [A1 B1 C0], [A1 B1 C1] (the first terms of b0..b3);
-    // rest: [A0 B1 C0], [A1 B0 C1] (second terms of b1, b2), [A0 B0 C1], [A0 B1 C1] (third).
-    const V4 first = LaneSums(A0 * B0C0, A1 * B0C0, A1 * B1C0, A1 * B1C1);
-    const V4 rest = LaneSums(A0 * B1C0, A1 * B0C1, A0 * B0C1, A0 * B1C1);
-    // second = (-0, rest0, rest1, -0), third = (-0, rest2, rest3, -0): x + (-0) = x, bit for bit.
-    static constexpr std::int64_t second_of[4] = {0, 0, 1, 3}, third_of[4] = {2, 2, 3, 3};
-    HWY_ALIGN static constexpr double inner[4] = {0, 1, 1, 0}, divisor[4] = {1, 3, 3, 1};
-    const auto middle = hn::Gt(hn::Load(d, inner), hn::Zero(d));
-    const V4 negative_zero = hn::Set(d, -0.0);
-    const V4 second = hn::IfThenElse(middle, Permute(rest, second_of), negative_zero);
-    const V4 third = hn::IfThenElse(middle, Permute(rest, third_of), negative_zero);
-    const V4 b = ((first + second) + third) / hn::Load(d, divisor);
-    // The 1-norms of A0, A1, B0, B1 and C0, C1 (lane 3 is not summed); a, b, c the larger of
-    // each pair.
-    HWY_ALIGN double norms[8];
-    hn::Store(LaneSums(hn::Abs(A0), hn::Abs(A1), hn::Abs(B0), hn::Abs(B1)), d, norms);
-    hn::Store(LaneSums(hn::Abs(C0), hn::Abs(C1), hn::Zero(d), hn::Zero(d)), d, norms + 4);
-    const Scalar a = std::max(norms[0], norms[1]), bb = std::max(norms[2], norms[3]), c = std::max(norms[4], norms[5]);
-    const Scalar error = Scalar(COPLANARITY_ERROR_FACTOR) * UNIT_ROUNDOFF * a * bb * c;
-    HWY_ALIGN double coefficients[4];
-    hn::Store(b, d, coefficients);
-    CoplanarityCubic cubic;
-    for (int k = 0; k < 4; ++k) cubic.b[k] = coefficients[k];
-    cubic.error = error;
-    if (cull && filter_culls(cubic)) return true;
-    cubic.extent = std::max({a, bb, c});
-    out = cubic;
-    return false;
-  }
-#endif
-}
-
-bool OneQueryCubic(QueryKind kind, const Query& query, bool cull, CoplanarityCubic& cubic) {
-  return kind == QueryKind::VertexFace ? CubicOfQuery<QueryKind::VertexFace>(query, cull, cubic)
-                                       : CubicOfQuery<QueryKind::EdgeEdge>(query, cull, cubic);
-}
-
-// The features' boxes over [lo, hi] more than need apart along x, y or z, all three axes at
-// once (which axis separates is random in a cloth step).
-bool OneQueryBoxesApart(QueryKind kind, const Query& q, Scalar lo, Scalar hi, bool need_given, Scalar& need) {
-#if !DRAPE_COORDINATE_LANES
-  return boxes_apart_scalar(kind, q, lo, hi, need_given, need);
-#else
-  {
-    const D4 d;
-    using V4 = hn::Vec<D4>;
-    const int split = kind == QueryKind::VertexFace ? 1 : 2;
-    const V4 at_lo = hn::Set(d, lo), at_hi = hn::Set(d, hi);
-    V4 point_lo[4], point_hi[4], largest = hn::Zero(d);
-    for (int i = 0; i < 4; ++i) {
-      const V4 start = LoadStart(q, i), end = LoadEnd(q, i);
-      const V4 motion = end - start;
-      const V4 x0 = start + at_lo * motion, x1 = start + at_hi * motion;
-      point_lo[i] = StdMin(x0, x1);
-      point_hi[i] = StdMax(x0, x1);
-      if (!need_given) largest = StdMax(largest, StdMax(hn::Abs(start), hn::Abs(end)));
-    }
-    // Point 0 is always the first feature's, point 3 the second's.
-    V4 a_lo = point_lo[0], a_hi = point_hi[0], b_lo = point_lo[3], b_hi = point_hi[3];
-    for (int i = 1; i < 3; ++i) {
-      V4& lo_i = i < split ? a_lo : b_lo;
-      V4& hi_i = i < split ? a_hi : b_hi;
-      lo_i = StdMin(lo_i, point_lo[i]);
-      hi_i = StdMax(hi_i, point_hi[i]);
-    }
-    if (!need_given) {
-      HWY_ALIGN double lanes[4];
-      hn::Store(largest, d, lanes);
-      need = need + PROJECTION_ERROR_FACTOR * UNIT_ROUNDOFF * std::max({lanes[0], lanes[1], lanes[2]});
-    }
-    const V4 need4 = hn::Set(d, need);
-    const auto apart = hn::Or(hn::Gt(b_lo - a_hi, need4), hn::Gt(a_lo - b_hi, need4));
-    return (Bits(d, apart) & 0b111) != 0;
-  }
-#endif
-}
-
 void FilterDecisions(const CoplanarityCubic* cubics, std::size_t n, bool* culled) {
   const D d;
   for (std::size_t i = 0; i < n; i += N) {
@@ -670,13 +414,10 @@ HWY_AFTER_NAMESPACE();
 
 #if HWY_ONCE
 namespace drape::ccd::detail {
-
 HWY_EXPORT(CubicsVertexFace);
 HWY_EXPORT(CubicsEdgeEdge);
 HWY_EXPORT(StageVertexFace);
 HWY_EXPORT(StageEdgeEdge);
-HWY_EXPORT(OneQueryCubic);
-HWY_EXPORT(OneQueryBoxesApart);
 HWY_EXPORT(MinMaxAbs);
 HWY_EXPORT(FilterDecisions);
 
@@ -696,59 +437,6 @@ StageBits separation_stage(const BatchInput& input, const VertexFacePair* pairs,
 StageBits separation_stage(const BatchInput& input, const EdgeEdgePair* pairs, const Left* left, int count,
                            bool vincent, Scalar gap, Scalar contact_tolerance, int depth) {
   return HWY_DYNAMIC_DISPATCH(StageEdgeEdge)(input, pairs, left, count, vincent, gap, contact_tolerance, depth);
-}
-
-// The one-query kernels run once or twice per query: their chosen versions are kept as
-// function pointers, chosen at start-up and again by use_kernel_target. HWY_DYNAMIC_DISPATCH
-// would ask libhwy for the chosen target on every call (a call into the shared library and an
-// atomic load), which cost the one-query methods about a tenth of their time.
-namespace {
-
-using CubicKernel = bool (*)(QueryKind, const Query&, bool, CoplanarityCubic&);
-using BoxesKernel = bool (*)(QueryKind, const Query&, Scalar, Scalar, bool, Scalar&);
-CubicKernel cubic_kernel = nullptr;
-BoxesKernel boxes_kernel = nullptr;
-
-void choose_one_query_kernels() {
-#if (HWY_TARGETS & (HWY_TARGETS - 1)) == 0
-  // One target compiled (the portable build, or -march=native): HWY_EXPORT's table then has a
-  // single entry, whatever index the chosen target has.
-  cubic_kernel = &HWY_STATIC_DISPATCH(OneQueryCubic);
-  boxes_kernel = &HWY_STATIC_DISPATCH(OneQueryBoxesApart);
-#else
-  hwy::ChosenTarget& chosen = hwy::GetChosenTarget();
-  chosen.Update(hwy::SupportedTargets());
-  const std::size_t index = chosen.GetIndex();
-  cubic_kernel = HWY_DISPATCH_TABLE(OneQueryCubic)[index];
-  boxes_kernel = HWY_DISPATCH_TABLE(OneQueryBoxesApart)[index];
-#endif
-}
-
-const bool one_query_kernels_chosen = (choose_one_query_kernels(), true);
-
-}  // namespace
-
-// (A caller's static initialisation may come before this file's: then they are chosen here.)
-bool one_query_cubic(QueryKind kind, const Query& query, bool cull, CoplanarityCubic& cubic) {
-  if (cubic_kernel == nullptr) [[unlikely]] choose_one_query_kernels();
-  return cubic_kernel(kind, query, cull, cubic);
-}
-
-bool one_query_boxes_apart(QueryKind kind, const Query& q, Scalar lo, Scalar hi, bool need_given, Scalar& need) {
-  if (boxes_kernel == nullptr) [[unlikely]] choose_one_query_kernels();
-  return boxes_kernel(kind, q, lo, hi, need_given, need);
-}
-
-std::vector<std::int64_t> kernel_targets() { return hwy::SupportedAndGeneratedTargets(); }
-
-void use_kernel_target(std::int64_t target) {
-  hwy::SetSupportedTargetsForTest(target);
-  choose_one_query_kernels();
-}
-
-std::string kernel_target_name() {
-  const std::vector<std::int64_t> targets = hwy::SupportedAndGeneratedTargets();
-  return targets.empty() ? "none" : hwy::TargetName(targets.front());
 }
 
 void min_max_abs(const double* a, const double* b, std::size_t n, double* min, double* max, double* abs) {
