@@ -39,24 +39,23 @@ namespace detail {
 
 // The inside test of the root-finding methods at a candidate time: the closest points of the
 // features there (the standard formulas) and their distance against the tolerance.
-bool touching_at(const Problem& p, Scalar t, Result& result) {
-  const auto x = positions_at<Scalar>(p.query, t);
-  Scalar distance_squared = 0;
-  Vec2 params;
-  if (p.kind == QueryKind::VertexFace) {
+ClosestAt closest_at(QueryKind kind, const Query& query, Scalar t) {
+  const auto x = positions_at<Scalar>(query, t);
+  if (kind == QueryKind::VertexFace) {
     const auto c = closest_point_triangle<Scalar>(x[0], x[1], x[2], x[3]);
-    distance_squared = c.distance_squared;
-    params = Vec2(c.weight_b, c.weight_c);
-  } else {
-    const auto c = closest_segment_segment<Scalar>(x[0], x[1], x[2], x[3]);
-    distance_squared = c.distance_squared;
-    params = Vec2(c.s, c.u);
+    return {c.distance_squared, Vec2(c.weight_b, c.weight_c)};
   }
+  const auto c = closest_segment_segment<Scalar>(x[0], x[1], x[2], x[3]);
+  return {c.distance_squared, Vec2(c.s, c.u)};
+}
+
+bool touching_at(const Problem& p, Scalar t, Result& result) {
+  const ClosestAt closest = closest_at(p.kind, p.query, t);
   const Scalar tolerance = contact_distance(p.options, p.cubic);
-  if (!(distance_squared <= tolerance * tolerance)) return false;
+  if (!(closest.distance_squared <= tolerance * tolerance)) return false;
   result.hit = true;
   result.toc = t;
-  result.params = params;
+  result.params = closest.params;
   return true;
 }
 
@@ -69,13 +68,19 @@ Result degenerate_path(const Problem& p) {
 Result run_unculled(QueryKind kind, const Query& query, const Options& options, const CoplanarityCubic& cubic,
                     std::optional<bool> stage_separated) {
   const Problem p{kind, query, options, cubic, stage_separated};
+  Result result;
   switch (options.method) {
-    case Method::Cubic: return cubic_method(p);
-    case Method::Dnf: return dnf_method(p);
-    case Method::Vincent: return vincent_method(p);
-    case Method::Conservative: return conservative_search(p, /*use_cubic=*/true);
+    case Method::Cubic: result = cubic_method(p); break;
+    case Method::Dnf: result = dnf_method(p); break;
+    case Method::Vincent: result = vincent_method(p); break;
+    case Method::Conservative: result = conservative_search(p, /*use_cubic=*/true); break;
   }
-  return Result{};
+  // Every hit's parameters are the closest points' at its time of contact, whichever path
+  // found it (the interval searches find theirs at a nearby time, by another distance
+  // routine), so that a caller builds its contact from them; hits are few, and touching_at's
+  // are these already.
+  if (result.hit) result.params = closest_at(kind, query, result.toc).params;
+  return result;
 }
 
 }  // namespace detail

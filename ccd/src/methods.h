@@ -118,6 +118,14 @@ Result conservative_search(const Problem& p, bool use_cubic);
 /// contact parameters. elementary.cpp.
 bool touching_at(const Problem& p, Scalar t, Result& result);
 
+/// The features' closest points at time t: their squared distance and the contact parameters
+/// there (Result::params).
+struct ClosestAt {
+  Scalar distance_squared = 0;
+  Vec2 params = Vec2::Zero();
+};
+ClosestAt closest_at(QueryKind kind, const Query& query, Scalar t);
+
 /// The degenerate path of cubic, dnf and vincent: the conservative search by distance alone.
 /// elementary.cpp.
 Result degenerate_path(const Problem& p);

@@ -145,12 +145,12 @@ ccd::Candidates CollisionPipeline::Impl::candidates(Scalar margin, CollisionCoun
   return all;
 }
 
-Scalar CollisionPipeline::Impl::canonical_toc(ccd::QueryKind kind, const ccd::Query& query, Scalar toc) const {
-  if (options.method == ccd::Method::Vincent) return toc;
+ccd::Result CollisionPipeline::Impl::canonical_hit(ccd::QueryKind kind, const ccd::Query& query, const ccd::Result& hit) const {
+  if (options.method == ccd::Method::Vincent) return hit;
   ccd::Options vincent = options;
   vincent.method = ccd::Method::Vincent;
   const ccd::Result r = ccd::elementary_ccd(kind, query, vincent);
-  return r.hit ? r.toc : toc;
+  return r.hit ? r : hit;
 }
 
 std::vector<std::pair<Contact, Scalar>> CollisionPipeline::Impl::detect(Scalar h, const std::vector<Vec3>& motion,
@@ -173,13 +173,13 @@ std::vector<std::pair<Contact, Scalar>> CollisionPipeline::Impl::detect(Scalar h
   std::vector<std::pair<Contact, Scalar>> hits;
   for (const ccd::BatchHit& hit : out.vertex_face) {
     const auto& p = c.vertex_face[hit.index];
-    const Scalar toc = canonical_toc(ccd::QueryKind::VertexFace, ccd::gather(input, p), hit.result.toc);
-    hits.emplace_back(contact(true, {p.vertex, p.face[0], p.face[1], p.face[2]}, toc), toc);
+    const ccd::Result r = canonical_hit(ccd::QueryKind::VertexFace, ccd::gather(input, p), hit.result);
+    hits.emplace_back(contact(true, {p.vertex, p.face[0], p.face[1], p.face[2]}, r), r.toc);
   }
   for (const ccd::BatchHit& hit : out.edge_edge) {
     const auto& p = c.edge_edge[hit.index];
-    const Scalar toc = canonical_toc(ccd::QueryKind::EdgeEdge, ccd::gather(input, p), hit.result.toc);
-    hits.emplace_back(contact(false, {p.edge_a[0], p.edge_a[1], p.edge_b[0], p.edge_b[1]}, toc), toc);
+    const ccd::Result r = canonical_hit(ccd::QueryKind::EdgeEdge, ccd::gather(input, p), hit.result);
+    hits.emplace_back(contact(false, {p.edge_a[0], p.edge_a[1], p.edge_b[0], p.edge_b[1]}, r), r.toc);
   }
   if (moved && before)
     for (const auto& hit : *before)

@@ -153,9 +153,10 @@ struct CollisionPipeline::Impl {
   // all, never reversing. Returns how many contacts push.
   int impulses(ContactSet& set, Scalar h, std::vector<Vec3>& motion) const;
 
-  // The contact of a vertex-face or edge-edge pair: weights from the closest points at time s
-  // of the step, normal from the features at toc oriented as they were at the start.
-  Contact contact(bool vertex_face, const std::array<int, 4>& v, Scalar toc) const;
+  // The contact of a vertex-face or edge-edge pair from the narrow phase's hit: weights from
+  // its contact parameters (the closest points at its time of contact), normal from the
+  // features at that time oriented as they were at the start.
+  Contact contact(bool vertex_face, const std::array<int, 4>& v, const ccd::Result& hit) const;
 
   // The order of a whole round's contacts, which the response keeps (its impulses are solved in
   // that order): vertex-face before edge-edge, each kind the cloth's own and then each mesh
@@ -171,11 +172,12 @@ struct CollisionPipeline::Impl {
     return block;
   }
 
-  // The time of contact the response uses: vincent's for any method that agrees on the hit,
-  // so that the method chosen changes the cost of detection, never the simulation (cubic and
-  // dnf find the same roots, to rounding; those last bits would otherwise grow into different
-  // trajectories). Where vincent sees no hit (conservative's near misses), the method's own.
-  Scalar canonical_toc(ccd::QueryKind kind, const ccd::Query& query, Scalar toc) const;
+  // The hit the response builds its contact from (time of contact and contact parameters):
+  // vincent's for any method that agrees on the hit, so that the method chosen changes the
+  // cost of detection, never the simulation (cubic and dnf find the same roots, to rounding;
+  // those last bits would otherwise grow into different trajectories). Where vincent sees no
+  // hit (conservative's near misses), the method's own. With vincent, the hit itself.
+  ccd::Result canonical_hit(ccd::QueryKind kind, const ccd::Query& query, const ccd::Result& hit) const;
 
   // One detection round: the collisions of the current motion. A later round passes the flags
   // of the vertices whose motion changed since the round before, and that round's hits: the

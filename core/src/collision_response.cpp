@@ -46,14 +46,14 @@ int CollisionPipeline::Impl::impulses(ContactSet& set, Scalar h, std::vector<Vec
   return count;
 }
 
-Contact CollisionPipeline::Impl::contact(bool vertex_face, const std::array<int, 4>& v, Scalar toc) const {
+Contact CollisionPipeline::Impl::contact(bool vertex_face, const std::array<int, 4>& v, const ccd::Result& hit) const {
   const auto at = [&](int k, Scalar s) -> Vec3 { return start[v[k]] + s * (end[v[k]] - start[v[k]]); };
+  const Scalar toc = hit.toc;
   Contact c;
   c.vertex_face = vertex_face;
   c.vertex = v;
   if (vertex_face) {
-    const auto closest = ccd::closest_point_triangle<Scalar>(at(0, toc), at(1, toc), at(2, toc), at(3, toc));
-    const Scalar wb = closest.weight_b, wc = closest.weight_c;
+    const Scalar wb = hit.params[0], wc = hit.params[1];
     c.weight = {1, -(1 - wb - wc), -wb, -wc};
     Vec3 n = (at(2, toc) - at(1, toc)).cross(at(3, toc) - at(1, toc));
     const Vec3 offset_at_start = at(0, 0) - ccd::closest_point_triangle<Scalar>(at(0, 0), at(1, 0), at(2, 0), at(3, 0)).point;
@@ -61,8 +61,8 @@ Contact CollisionPipeline::Impl::contact(bool vertex_face, const std::array<int,
     if (n.dot(offset_at_start) < 0) n = -n;
     c.normal = n.norm() > 0 ? Vec3(n.normalized()) : Vec3::UnitZ();
   } else {
-    const auto closest = ccd::closest_segment_segment<Scalar>(at(0, toc), at(1, toc), at(2, toc), at(3, toc));
-    c.weight = {1 - closest.s, closest.s, -(1 - closest.u), -closest.u};
+    const Scalar s = hit.params[0], u = hit.params[1];
+    c.weight = {1 - s, s, -(1 - u), -u};
     Vec3 n = (at(1, toc) - at(0, toc)).cross(at(3, toc) - at(2, toc));
     const auto at_start = ccd::closest_segment_segment<Scalar>(at(0, 0), at(1, 0), at(2, 0), at(3, 0));
     const Vec3 offset_at_start = at_start.point_a - at_start.point_b;

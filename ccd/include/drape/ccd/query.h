@@ -102,8 +102,9 @@ struct Result {
   bool hit = false;
   /// Earliest time of contact in [0, 1] (valid when hit).
   Scalar toc = 1.0;
-  /// Contact parameters at toc: vertex-face, barycentric weights (w1, w2) of face[1] and face[2]
-  /// (face[0] has 1 - w1 - w2); edge-edge, (s, u) along edge_a and edge_b.
+  /// Contact parameters at toc (valid when hit): the features' closest points there, whichever
+  /// path decided; vertex-face, barycentric weights (w1, w2) of face[1] and face[2] (face[0]
+  /// has 1 - w1 - w2); edge-edge, (s, u) along edge_a and edge_b.
   Vec2 params = Vec2::Zero();
   Path path = Path::Culled;
   /// Root-finding calls made: bracketed refinements, cubic solves or subdivided intervals.
