@@ -30,19 +30,19 @@ void CollisionCounters::add(const CollisionCounters& o) {
   response_ms += o.response_ms;
 }
 
-std::string thickness_note(const Model& model, const CollisionSettings& settings) {
+std::string thickness_note(const Model& model) {
   if (!model.scene.collisions.self) return {};
   Scalar shortest = std::numeric_limits<Scalar>::infinity();
   for (const Spring& s : model.springs)
     if (s.kind == SpringKind::Stretch) shortest = std::min(shortest, s.rest_length);
   const Scalar thickness = model.scene.collisions.thickness;
-  if (!(settings.rest_fraction * shortest < thickness)) return {};
+  if (!(REST_FRACTION * shortest < thickness)) return {};
   char text[512];
   std::snprintf(text, sizeof text,
                 "the thickness (%.3g m) is large against the cloth's shortest edge (%.3g m): features of one cloth "
                 "closer than %.3g m in the rest shape keep %.0f %% of their rest distance apart instead of the "
                 "thickness (counted per frame as rest_clamped_pairs in stats.csv; docs/collisions.md)",
-                thickness, shortest, thickness / settings.rest_fraction, 100 * settings.rest_fraction);
+                thickness, shortest, thickness / REST_FRACTION, 100 * REST_FRACTION);
   return text;
 }
 
@@ -207,7 +207,7 @@ CollisionCounters CollisionPipeline::resolve(const std::vector<Vec3>& start, Sca
   const auto begin = Clock::now();
   for (int v = 0; v < m.cloth_vertices; ++v) m.start[v] = start[v];
   m.pose_obstacles(t, h);
-  const Scalar separation = m.settings.separation_fraction * m.model.scene.collisions.thickness / h;
+  const Scalar separation = SEPARATION_FRACTION * m.model.scene.collisions.thickness / h;
 
   // Proximity repulsion on the first round's candidates, then CCD impulses until no collision.
   ccd::Candidates first;

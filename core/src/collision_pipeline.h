@@ -33,6 +33,11 @@ inline constexpr Scalar INNER_WEIGHT = 0.01;
 // fewer once no impulse changes by more than IMPULSE_TOLERANCE times thickness / h.
 inline constexpr int IMPULSE_SWEEPS = 100;
 inline constexpr Scalar IMPULSE_TOLERANCE = 1e-3;
+// Between its rounds the pipeline keeps free vertices this fraction of the thickness out of the
+// spheres and planes, by the same projection as the integrator's response before it (which
+// keeps the whole thickness, with friction): a guard against the self-collision response
+// pushing cloth into a shape, not a second response (docs/collisions.md).
+inline constexpr Scalar ANALYTIC_KEEP_OUT = 0.5;
 
 using Clock = std::chrono::steady_clock;
 inline double ms_since(Clock::time_point begin) { return std::chrono::duration<double, std::milli>(Clock::now() - begin).count(); }
@@ -189,14 +194,15 @@ struct CollisionPipeline::Impl {
                                                  const std::vector<std::pair<Contact, Scalar>>* before = nullptr);
 
   // The self-collision response must not push cloth into a sphere or plane (the integrator
-  // answered those before): a free vertex whose end position lies within half the thickness of
-  // one is moved back out to that depth. Runs before every re-detection, so what the final
-  // detection sees is both above the shapes and, when it finds nothing, intersection-free.
+  // answered those before): a free vertex whose end position lies within ANALYTIC_KEEP_OUT of
+  // the thickness of one is moved back out to that depth (drape::keep_out_of_analytic_obstacles,
+  // without friction). Runs before every re-detection, so what the final detection sees is both
+  // above the shapes and, when it finds nothing, intersection-free.
   void keep_out_of_analytic_obstacles(Scalar t_next, Scalar h, std::vector<Vec3>& motion) const;
 
   // The gap kept between two features: the thickness, but for features of one cloth that are
   // closer than it in the rest shape (neighbours on a mesh finer than the thickness), which
-  // keep rest_fraction of their rest distance (docs/collisions.md, "Thickness and the rest
+  // keep REST_FRACTION of their rest distance (docs/collisions.md, "Thickness and the rest
   // shape"). Pairs with an obstacle vertex, or across two cloths, keep the thickness.
   Scalar kept_gap(bool vertex_face, const std::array<int, 4>& v, CollisionCounters& counters) const;
 

@@ -76,13 +76,8 @@ Contact CollisionPipeline::Impl::contact(bool vertex_face, const std::array<int,
 
 void CollisionPipeline::Impl::keep_out_of_analytic_obstacles(Scalar t_next, Scalar h, std::vector<Vec3>& motion) const {
   if (!model.scene.collisions.obstacles) return;
-  const Scalar floor = 0.5 * model.scene.collisions.thickness;
-  for (const Obstacle& obstacle : model.obstacles) {
-    if (obstacle.spec.kind == ObstacleSpec::Kind::Mesh) continue;
-    const PosedShape shape = pose_shape(obstacle, t_next);
-    for (int v = 0; v < cloth_vertices; ++v)
-      if (inverse_mass[v] > 0) push_out(shape, t_next, start[v], h, floor, motion[v]);
-  }
+  drape::keep_out_of_analytic_obstacles(model, start, t_next, h, ANALYTIC_KEEP_OUT * model.scene.collisions.thickness,
+                                        motion, nullptr);
 }
 
 Scalar CollisionPipeline::Impl::kept_gap(bool vertex_face, const std::array<int, 4>& v, CollisionCounters& counters) const {
@@ -93,7 +88,7 @@ Scalar CollisionPipeline::Impl::kept_gap(bool vertex_face, const std::array<int,
   const auto p = [&](int k) -> const Vec3& { return r[std::size_t(v[k])]; };
   const Scalar rest_squared = vertex_face ? ccd::closest_point_triangle<Scalar>(p(0), p(1), p(2), p(3)).distance_squared
                                           : ccd::closest_segment_segment<Scalar>(p(0), p(1), p(2), p(3)).distance_squared;
-  const Scalar f = settings.rest_fraction;
+  const Scalar f = REST_FRACTION;
   if (f * f * rest_squared >= thickness * thickness) return thickness;
   ++counters.rest_clamped_pairs;
   return f * std::sqrt(rest_squared);

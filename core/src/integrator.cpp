@@ -110,43 +110,6 @@ void add_wind(const Model& model, const State& state, std::vector<Vec3>& forces)
   }
 }
 
-// Spheres and planes: a vertex whose predicted position x0 + h u lies within the thickness of
-// the surface moves (u) to land on it; its velocity (v) loses the approaching normal part and
-// feels Coulomb friction relative to the surface (Bridson, Fedkiw and Anderson 2002, 7.1).
-int respond_to_analytic_obstacles(const Model& model, const std::vector<Vec3>& start, Scalar t_next, Scalar h,
-                                  std::vector<Vec3>& velocities, std::vector<Vec3>& motion) {
-  const Scalar thickness = model.scene.collisions.thickness;
-  const Scalar mu = model.scene.friction;
-  int contacts = 0;
-  for (const Obstacle& obstacle : model.obstacles) {
-    if (obstacle.spec.kind == ObstacleSpec::Kind::Mesh) continue;  // the collision pipeline's
-    const PosedShape shape = pose_shape(obstacle, t_next);
-    for (std::size_t v = 0; v < start.size(); ++v) {
-      if (model.pin_of_vertex[v] >= 0) continue;
-      const Vec3 before = motion[v];
-      const auto contact = push_out(shape, t_next, start[v], h, thickness, motion[v]);
-      if (!contact) continue;
-      ++contacts;
-      const SurfaceContact& c = *contact;
-      // Friction on the motion too, from the normal change the projection made: without it
-      // the projection slides a vertex along the surface by the tangential part of its whole
-      // step (a cloth landing on a sphere spread outward, its springs stretched: energy grew).
-      const Scalar pushed = (motion[v] - before).dot(c.normal);
-      const Vec3 slide = motion[v] - c.surface_velocity;
-      const Vec3 slide_tangential = slide - slide.dot(c.normal) * c.normal;
-      const Scalar slide_speed = slide_tangential.norm();
-      if (slide_speed > 0 && pushed > 0) motion[v] -= slide_tangential * std::min<Scalar>(1, mu * pushed / slide_speed);
-      const Vec3 relative = velocities[v] - c.surface_velocity;
-      const Scalar normal_speed = relative.dot(c.normal);
-      if (normal_speed >= 0) continue;  // already separating
-      Vec3 tangential = relative - normal_speed * c.normal;
-      const Scalar speed = tangential.norm();
-      if (speed > 0) tangential *= std::max<Scalar>(0, 1 - mu * -normal_speed / speed);
-      velocities[v] = c.surface_velocity + tangential;
-    }
-  }
-  return contacts;
-}
 
 }  // namespace
 
@@ -429,7 +392,8 @@ void Integrator::respond(State& state, std::vector<Vec3>& motion, StepReport& re
   const Model& m = model_;
   const Scalar h = h_;
   if (m.scene.collisions.obstacles)
-    report.obstacle_contacts += respond_to_analytic_obstacles(m, state.positions, state.time + h, h, state.velocities, motion);
+    report.obstacle_contacts += keep_out_of_analytic_obstacles(m, state.positions, state.time + h, h, m.scene.collisions.thickness,
+                                                               motion, &state.velocities);
   if (!collisions_) return;
   // The collision impulses are velocity changes: the state's velocities get them too.
   const std::vector<Vec3> before = motion;

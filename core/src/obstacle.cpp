@@ -1,5 +1,6 @@
 #include "drape/core/obstacle.h"
 
+#include <algorithm>
 #include <limits>
 #include <tuple>
 
@@ -57,6 +58,42 @@ std::optional<SurfaceContact> push_out(const PosedShape& shape, Scalar t_next, c
   const SurfaceContact c = analytic_contact(shape, t_next, predicted);
   motion = (predicted + (depth - c.signed_distance) * c.normal - start) / h;
   return c;
+}
+
+int keep_out_of_analytic_obstacles(const Model& model, const std::vector<Vec3>& start, Scalar t_next, Scalar h,
+                                   Scalar depth, std::vector<Vec3>& motion, std::vector<Vec3>* velocities) {
+  const Scalar mu = model.scene.friction;
+  int contacts = 0;
+  for (const Obstacle& obstacle : model.obstacles) {
+    if (obstacle.spec.kind == ObstacleSpec::Kind::Mesh) continue;  // the collision pipeline's
+    const PosedShape shape = pose_shape(obstacle, t_next);
+    for (std::size_t v = 0; v < model.vertex_count(); ++v) {
+      if (model.pin_of_vertex[v] >= 0) continue;
+      const Vec3 before = motion[v];
+      const auto contact = push_out(shape, t_next, start[v], h, depth, motion[v]);
+      if (!contact) continue;
+      ++contacts;
+      if (!velocities) continue;
+      const SurfaceContact& c = *contact;
+      // Friction on the motion too, from the normal change the projection made: without it
+      // the projection slides a vertex along the surface by the tangential part of its whole
+      // step (a cloth landing on a sphere spread outward, its springs stretched: energy grew).
+      const Scalar pushed = (motion[v] - before).dot(c.normal);
+      const Vec3 slide = motion[v] - c.surface_velocity;
+      const Vec3 slide_tangential = slide - slide.dot(c.normal) * c.normal;
+      const Scalar slide_speed = slide_tangential.norm();
+      if (slide_speed > 0 && pushed > 0) motion[v] -= slide_tangential * std::min<Scalar>(1, mu * pushed / slide_speed);
+      Vec3& velocity = (*velocities)[v];
+      const Vec3 relative = velocity - c.surface_velocity;
+      const Scalar normal_speed = relative.dot(c.normal);
+      if (normal_speed >= 0) continue;  // already separating
+      Vec3 tangential = relative - normal_speed * c.normal;
+      const Scalar speed = tangential.norm();
+      if (speed > 0) tangential *= std::max<Scalar>(0, 1 - mu * -normal_speed / speed);
+      velocity = c.surface_velocity + tangential;
+    }
+  }
+  return contacts;
 }
 
 }  // namespace drape

@@ -112,10 +112,10 @@ TEST(Collision, AnImpulseActsAlongItsNormalAndLeavesTheSeparationSpeed) {
     }
     EXPECT_NEAR(motion[v].x(), before[v].x(), 1e-12) << v;
     EXPECT_NEAR(motion[v].y(), before[v].y(), 1e-12) << v;
-    // Inelastic, with the separation speed CollisionSettings asks for: the step's fall is
+    // Inelastic, with the separation speed SEPARATION_FRACTION asks for: the step's fall is
     // replaced by a rise of a tenth of the thickness, enough that the next round does not
     // find the same contact again.
-    EXPECT_NEAR(motion[v].z(), CollisionSettings{}.separation_fraction * 0.003 / h, 1e-12) << v;
+    EXPECT_NEAR(motion[v].z(), SEPARATION_FRACTION * 0.003 / h, 1e-12) << v;
   }
   EXPECT_TRUE(collision_free(model, model.initial_positions, h, motion));
 }

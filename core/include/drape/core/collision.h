@@ -22,15 +22,17 @@
 
 namespace drape {
 
-/// What the response needs beyond the scene (whose collisions section, compiled into the
-/// model, gives the thickness, the CCD method and the impulse and impact-zone rounds).
+/// Separation speed an impulse leaves between colliding features, as a fraction of
+/// thickness / h: enough that the next round does not find the same contact again.
+constexpr Scalar SEPARATION_FRACTION = 0.1;
+/// Features of one cloth closer than the thickness in the rest shape keep this fraction of
+/// their rest distance as their gap instead of the thickness (docs/collisions.md).
+constexpr Scalar REST_FRACTION = 0.5;
+
+/// How a run executes the pipeline, beyond the model (whose scene's collisions section gives
+/// the thickness, the CCD method and the impulse and impact-zone rounds): neither changes the
+/// simulation.
 struct CollisionSettings {
-  /// Separation speed an impulse leaves between colliding features, as a fraction of
-  /// thickness / h: enough that the next round does not find the same contact again.
-  Scalar separation_fraction = 0.1;
-  /// Features of one cloth closer than the thickness in the rest shape keep this fraction of
-  /// their rest distance as their gap instead of the thickness (docs/collisions.md).
-  Scalar rest_fraction = 0.5;
   int threads = 1;  ///< narrow-phase threads (results do not depend on it)
   /// A detection round after the first runs only the tests with a vertex whose motion changed
   /// since the round before, keeping that round's other hits; false: every round runs every
@@ -58,10 +60,10 @@ struct CollisionCounters {
 };
 
 /// What the user should know when the thickness is large against a cloth's edges: with
-/// self-collision on and a stretch edge shorter than thickness / rest_fraction, neighbours of
-/// the rest shape keep rest_fraction of their rest distance instead of the thickness (counted
+/// self-collision on and a stretch edge shorter than thickness / REST_FRACTION, neighbours of
+/// the rest shape keep REST_FRACTION of their rest distance instead of the thickness (counted
 /// in the statistics as rest_clamped_pairs). Empty when nothing to say.
-std::string thickness_note(const Model& model, const CollisionSettings& settings = {});
+std::string thickness_note(const Model& model);
 
 /// A contact the implicit solve keeps (Baraff and Witkin 1998, section 5.3: a constraint on
 /// the velocity along the contact's normal; here held by a penalty): the relative velocity of

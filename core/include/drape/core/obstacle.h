@@ -45,6 +45,16 @@ SurfaceContact analytic_contact(const PosedShape& shape, Scalar t, const Vec3& x
 std::optional<SurfaceContact> push_out(const PosedShape& shape, Scalar t_next, const Vec3& start, Scalar h, Scalar depth,
                                        Vec3& motion);
 
+/// Keeps every free cloth vertex (no handle) out of the spheres and planes over a step from
+/// start ending at t_next (Bridson, Fedkiw and Anderson 2002, section 7.1): one whose
+/// predicted position start + h motion lies within depth of a surface moves (push_out) to land
+/// at depth on it. With velocities (the response after the solve, at the thickness), the
+/// motion also feels Coulomb friction from that push, and the velocity loses its approaching
+/// normal part and feels Coulomb friction relative to the surface; without (the collision
+/// pipeline between its rounds), only the motion changes. Returns how many vertices moved.
+int keep_out_of_analytic_obstacles(const Model& model, const std::vector<Vec3>& start, Scalar t_next, Scalar h,
+                                   Scalar depth, std::vector<Vec3>& motion, std::vector<Vec3>* velocities);
+
 /// The velocity at time t of the obstacle's body point now at x (translation plus rotation).
 Vec3 body_velocity(const Motion& motion, const Vec3& x_now, Scalar t);
 
