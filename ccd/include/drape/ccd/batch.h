@@ -1,5 +1,7 @@
 #pragma once
 /// \file
+/// Many elementary CCD tests at once over one vertex array: the entry point the cloth pipeline calls.
+///
 /// The batch entry point: many elementary tests over one vertex array at t = 0 and t = 1, the
 /// form the cloth pipeline calls.
 

@@ -1,5 +1,7 @@
 #pragma once
 /// \file
+/// Cubics on an interval in the Bernstein basis: evaluation, subdivision and sign variations.
+///
 /// Cubics on an interval in the Bernstein basis: d(t) = sum_i b_i C(3,i) s^i (1-s)^(3-i), where
 /// s runs from 0 to 1 over the interval. ccd-notes.md section 2.
 

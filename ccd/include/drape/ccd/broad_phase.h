@@ -1,5 +1,7 @@
 #pragma once
 /// \file
+/// The broad phase: a btDbvt over swept triangle boxes and the feature pairs it gives.
+///
 /// The broad phase: a dynamic bounding volume hierarchy over axis-aligned boxes (Bullet's
 /// btDbvt, double precision), updated in place from step to step, and the candidate
 /// elementary tests generated from overlapping triangle pairs.

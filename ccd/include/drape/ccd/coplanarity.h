@@ -1,5 +1,7 @@
 #pragma once
 /// \file
+/// The coplanarity cubic of four moving points, its rounding error and the filter's sign cull.
+///
 /// The coplanarity cubic d(t) = (x2(t) - x1(t)) x (x3(t) - x1(t)) . (x4(t) - x1(t)) of four
 /// linearly moving points (the paper's Section 3.1; ccd-notes.md section 1).
 

@@ -1,5 +1,7 @@
 #pragma once
 /// \file
+/// The standard closed-form cubic solver: the paper's unfiltered baseline.
+///
 /// A standard closed-form solver for the real roots of a cubic: the baseline of the paper
 /// ("the standard cubic solver without any filters").
 

@@ -1,5 +1,7 @@
 #pragma once
 /// \file
+/// Closest points between a point and a triangle and between two segments.
+///
 /// Closest points between a point and a triangle and between two segments, robust to zero-area
 /// triangles, zero-length and parallel segments. The regions follow Ericson, "Real-Time
 /// Collision Detection" (2005), sections 5.1.5 and 5.1.9.

@@ -1,5 +1,7 @@
 #pragma once
 /// \file
+/// Reading a file a user named without trusting it (loops, devices, sizes).
+///
 /// Reading a file a user named (a scene, a mesh, a query file, a run's scene copy) without
 /// trusting it: a symlink loop, a device such as /dev/zero, a folder or a file larger than the
 /// reader's limit is refused with a message, before anything is read. Every reader of drape

@@ -1,5 +1,7 @@
 #pragma once
 /// \file
+/// Self-collision culling: patches of one mesh proven free of self-contact over a step.
+///
 /// Self-collision culling: a hierarchy of connected patches of one triangle mesh, each patch
 /// proven free of self-contact over a step by a continuous normal cone and a contour test, so
 /// that a flat or gently curved, untwisted region of cloth gives no candidate pairs.

@@ -1,5 +1,7 @@
 #pragma once
 /// \file
+/// The scalar and vector types of the whole code base (precision chosen once).
+///
 /// Precision is chosen once for the whole code base.
 
 #include <Eigen/Core>

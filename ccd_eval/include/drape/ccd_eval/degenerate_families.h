@@ -1,5 +1,7 @@
 #pragma once
 /// \file
+/// Degenerate CCD queries enumerated by family, for tests and benchmarks.
+///
 /// Degenerate CCD queries, enumerated systematically (docs/ccd.md, "Degenerate families"): a
 /// feature that degenerates (a triangle of zero area, an edge of zero length, edges on one
 /// line) at the start of the step, at its end, at one moment within it or throughout, with the

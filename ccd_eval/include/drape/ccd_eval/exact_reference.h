@@ -1,5 +1,7 @@
 #pragma once
 /// \file
+/// The exact reference for a CCD query, in rational arithmetic (GMP).
+///
 /// The exact reference: whether two linearly moving features touch at some time of the step,
 /// decided in rational arithmetic (GMP) from the query's coordinates, every degenerate
 /// configuration included. Slow (tens to hundreds of microseconds a query) and exact: the

@@ -1,5 +1,7 @@
 #pragma once
 /// \file
+/// Reading and writing CCD query files in the public benchmark's CSV format.
+///
 /// Query files in the public CSV format of the CCD benchmark (tests/data/ccd-queries/FORMAT.md):
 /// 8 rows a query, 7 integer columns x_num, x_den, y_num, y_den, z_num, z_den, truth.
 

@@ -1,5 +1,7 @@
 #pragma once
 /// \file
+/// Reproducible synthetic CCD queries for tests and benchmarks.
+///
 /// Reproducible synthetic CCD queries: random families for the agreement and degenerate-case
 /// tests, and a cloth-like set for the benchmarks. The same seed gives the same queries.
 

@@ -1,5 +1,7 @@
 #pragma once
 /// \file
+/// A batch of scene runs from a manifest, resumable, with one table of outcomes.
+///
 /// A batch: a list of scene runs from a manifest, each into its own folder, resumable, and one
 /// table of their outcomes (drape batch; the app hands the runs out across MPI ranks).
 ///

@@ -1,5 +1,7 @@
 #pragma once
 /// \file
+/// The collision pipeline of a step: broad phase, CCD, impulses, impact zones, fail-safe.
+///
 /// The collision pipeline of a step (Bridson, Fedkiw and Anderson, "Robust treatment of
 /// collisions, contact and friction for cloth animation", SIGGRAPH 2002; Harmon et al.,
 /// "Robust treatment of simultaneous collisions", SIGGRAPH 2008): given the start positions,

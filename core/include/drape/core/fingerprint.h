@@ -1,5 +1,7 @@
 #pragma once
 /// \file
+/// Fingerprints that tell whether a scene or a file changed since a run was kept.
+///
 /// Fingerprints that tell whether a scene, or a file, changed since a run was kept: a batch or
 /// a sweep started again reruns a run whose inputs changed (FNV-1a, 64 bits; not a security
 /// hash).

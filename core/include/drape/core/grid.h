@@ -1,5 +1,7 @@
 #pragma once
 /// \file
+/// The built-in rectangular cloth: a grid of quads split into triangles.
+///
 /// The built-in rectangular cloth: a grid of quads split into triangles, in its local plane
 /// z = 0, centred on the origin, x along the first size and resolution, y along the second.
 

@@ -1,5 +1,7 @@
 #pragma once
 /// \file
+/// The state of a run and the implicit step, by the scene's solver.
+///
 /// The state of a run and the implicit step, by one of two solvers (the scene's solver.type):
 /// - linearised backward Euler (Baraff and Witkin, "Large steps in cloth simulation",
 ///   SIGGRAPH 1998), the accurate reference:

@@ -1,5 +1,7 @@
 #pragma once
 /// \file
+/// The sparse solve of the implicit step behind one interface (CHOLMOD, CG).
+///
 /// The sparse solve of the implicit step, behind one interface: SuiteSparse CHOLMOD (a sparse
 /// Cholesky factorisation whose symbolic analysis is reused while the matrix's pattern stays
 /// the same, and whose numeric factorisation preconditions a conjugate gradient on later

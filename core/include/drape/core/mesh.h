@@ -1,5 +1,7 @@
 #pragma once
 /// \file
+/// Triangle meshes, the cloth's and the obstacles', with their topology queries.
+///
 /// Triangle meshes: the cloth's and the obstacles'. Plain data plus the topology queries the
 /// cloth model and the collision pipeline need.
 

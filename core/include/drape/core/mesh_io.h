@@ -1,5 +1,7 @@
 #pragma once
 /// \file
+/// Mesh files in and out: assimp for every format, OBJ frames in round-trip double precision.
+///
 /// Mesh files in and out, through assimp (OBJ, PLY, STL, glTF, Collada, ...). assimp stays
 /// behind these two functions.
 

@@ -1,5 +1,7 @@
 #pragma once
 /// \file
+/// The model: what a scene fixes for a whole run, built once from it.
+///
 /// The model: everything about a scene that does not change during a run, built once from the
 /// scene (meshes loaded and validated, springs, masses, handles, obstacles). The state that
 /// changes lives in State; a step is step(const Model&, State&, ...).

@@ -1,5 +1,7 @@
 #pragma once
 /// \file
+/// Obstacles posed at a time: distances, normals, surface velocities and the push out.
+///
 /// Obstacles posed at a time: where the analytic shapes are, how far a point is from them, and
 /// how fast their surface moves.
 

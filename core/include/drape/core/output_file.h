@@ -1,5 +1,7 @@
 #pragma once
 /// \file
+/// Every file drape writes, written so that no write fails silently.
+///
 /// Every file drape writes goes through here, so that no write fails silently: a full disk,
 /// a quota or any I/O error throws OutputError naming the file, and what was complete before
 /// stays complete (whole files appear by rename, rows are appended whole).

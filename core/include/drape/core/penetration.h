@@ -1,5 +1,7 @@
 #pragma once
 /// \file
+/// The independent penetration check of a frame, with exact predicates.
+///
 /// The independent penetration check: do any two non-adjacent cloth triangles meet, or a cloth
 /// triangle and an obstacle (a mesh's triangle, a sphere's ball, a plane's lower half-space)?
 /// Decided exactly (CGAL's filtered exact predicates: floating point where its answer is

@@ -1,5 +1,7 @@
 #pragma once
 /// \file
+/// A run: frames of steps, each frame's mesh and statistics written when done.
+///
 /// A run: frames of steps, each frame's mesh and statistics row written as soon as it is done,
 /// so a run that stops keeps everything finished before it.
 

@@ -1,5 +1,7 @@
 #pragma once
 /// \file
+/// The scene a JSON file describes, validated, with every default in the structs.
+///
 /// The scene: what a JSON scene file describes, validated, with every default in the structs.
 /// Immutable once loaded; what changes during a run lives in the simulation state.
 ///

@@ -1,5 +1,7 @@
 #pragma once
 /// \file
+/// The columns of stats.csv in one table: name, format and golden tolerance.
+///
 /// The columns of stats.csv in one table: each column's name, how a frame's value is written
 /// and the tolerance the golden comparison allows it.
 

@@ -1,5 +1,7 @@
 #pragma once
 /// \file
+/// Compares a run's stats.csv with a golden one, column by column.
+///
 /// Compares a run's stats.csv with a golden one, column by column, with per-column tolerances.
 
 #include <filesystem>

@@ -1,5 +1,7 @@
 #pragma once
 /// \file
+/// The textile laboratory's measurements on a run (the Cusick drape test).
+///
 /// Measurements of the textile laboratory on a simulated cloth: the Cusick drape test's drape
 /// coefficient and node count (BS 5058, ISO 9073-9).
 

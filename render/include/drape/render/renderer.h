@@ -1,5 +1,7 @@
 #pragma once
 /// \file
+/// Off-screen rendering of a run's frames to PNG and MP4.
+///
 /// Off-screen rendering of a run's frames, behind drape's own interface. The implementation
 /// uses OSMesa (software, no display); Mesa removed OSMesa in 25.1, so nothing outside
 /// render/src/osmesa_renderer.cpp knows about it, and another back end (surfaceless EGL) can

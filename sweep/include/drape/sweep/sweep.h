@@ -1,5 +1,7 @@
 #pragma once
 /// \file
+/// The speed-accuracy sweep: a scene over a grid of accuracy settings against a reference.
+///
 /// The speed-accuracy trade: a scene run over a grid of accuracy settings, each run compared
 /// with a reference run at the most accurate setting (drape sweep; docs/sweep.md).
 
