@@ -1,7 +1,10 @@
-// The collision response itself (core/src/collision.cpp), one resolve of a step at a time:
-// impulses that keep momentum, act along the contact normal and replace the approach by the
-// separation speed, Coulomb's bound on friction, impact zones that keep linear and angular
-// momentum, the fail-safe, and kinematic (pinned) vertices never moved.
+// The collision response itself (core/src/collision.cpp, collision_response.cpp), one resolve
+// of a step at a time: impulses that keep momentum, act along the contact normal (of a face or
+// of two edges, tilted or not) and replace the approach by the separation speed, proximity
+// impulses that stop an approach within the thickness and no more, Coulomb's bound on
+// friction, impact zones that keep linear and angular momentum or move with the pinned
+// vertices they hold, the fail-safe (only the colliding vertices stopped), and kinematic
+// (pinned) vertices never moved.
 #include <gtest/gtest.h>
 
 #include <sstream>
@@ -227,4 +230,142 @@ TEST(Collision, LaterRoundsTestingOnlyWhatMovedFindWhatWholeRoundsFind) {
                 a.ccd_hits, a.impulse_iterations, a.impact_zones, a.fail_safes, a.vf_tests + a.ee_tests,
                 b.vf_tests + b.ee_tests);
   }
+}
+
+namespace {
+
+// Turns a configuration as a whole (positions and motions) by angle degrees about axis.
+std::vector<Vec3> turned(const std::vector<Vec3>& points, Scalar degrees, const Vec3& axis) {
+  const Eigen::AngleAxis<Scalar> turn(degrees * EIGEN_PI / 180, axis.normalized());
+  std::vector<Vec3> out(points.size());
+  for (std::size_t v = 0; v < points.size(); ++v) out[v] = turn * points[v];
+  return out;
+}
+
+// Two strips 40 x 4 cm of one quad each, crossing at right angles 2 cm apart, the lower one
+// pinned: neither has a vertex over the other's faces, so every contact of a fall is one of
+// the upper's edges with one of the lower's, and every edge lies in a horizontal plane.
+Model crossing_strips() {
+  return build_model(parse_scene(R"({"frame_time": 0.05, "frame_steps": 1, "friction": 0,
+    "cloths": [{"grid": {"size": [0.04, 0.4], "resolution": [1, 1]}},
+               {"grid": {"size": [0.4, 0.04], "resolution": [1, 1]}, "transform": {"translate": [0.003, -0.002, 0.02]}}],
+    "handles": [{"cloth": 0, "box": {"min": [-1, -1, -1], "max": [1, 1, 1]}}],
+    "collisions": {"self": true, "thickness": 0.003}})",
+                                 "inline.json"));
+}
+
+}  // namespace
+
+TEST(Collision, ImpulsesActAlongTiltedNormalsOfFacesAndEdges) {
+  // The falling square on the pinned sheet (vertex-face contacts) and the falling strip across
+  // the pinned one (edge-edge contacts), both turned 35 degrees about a tilted axis as a whole:
+  // frictionless, every free vertex's change is along the turned sheet's normal, and its
+  // motion along that normal ends at the separation speed.
+  const Vec3 axis(1, 0.4, 0.2);
+  const Scalar degrees = 35;
+  const Vec3 normal = turned({Vec3::UnitZ()}, degrees, axis)[0];
+  for (const bool edges : {false, true}) {
+    const Model model = edges ? crossing_strips() : square_over_pinned_sheet(0);
+    const Scalar h = model.scene.timestep();
+    const std::vector<Vec3> start = turned(model.initial_positions, degrees, axis);
+    std::vector<Vec3> motion = turned(motions(model, Vec3(0.1, 0.05, -2.0)), degrees, axis);
+    const std::vector<Vec3> before = motion;
+    CollisionPipeline pipeline(model, CollisionSettings{});
+    const CollisionCounters c = pipeline.resolve(start, 0, h, motion);
+    EXPECT_GT(c.ccd_hits, 0) << edges;
+    EXPECT_EQ(c.impact_zones, 0) << edges;
+    int changed = 0;
+    for (int v = model.cloths[1].first_vertex; v < int(motion.size()); ++v) {
+      const Vec3 change = motion[std::size_t(v)] - before[std::size_t(v)];
+      if (change.norm() == 0) continue;
+      ++changed;
+      EXPECT_LT(change.cross(normal).norm(), 1e-9 * change.norm()) << edges << ", vertex " << v;
+      EXPECT_GT(change.dot(normal), 0) << edges << ", vertex " << v;
+    }
+    EXPECT_GT(changed, 0) << edges;
+    // The strip's contacts are at inner points of its edges, so its vertices share the
+    // separation by their weights; the square's are its vertices themselves.
+    if (!edges)
+      for (int v = model.cloths[1].first_vertex; v < int(motion.size()); ++v)
+        EXPECT_NEAR(motion[std::size_t(v)].dot(normal), SEPARATION_FRACTION * 0.003 / h, 1e-9) << v;
+    EXPECT_TRUE(collision_free(model, start, h, motion)) << edges;
+  }
+}
+
+TEST(Collision, ProximityStopsAnApproachWithinTheThicknessAndNoMore) {
+  // The square 2 mm above the pinned sheet (within its 3 mm thickness): approaching slowly
+  // (no crossing within the step), the proximity impulses stop the approach and leave no
+  // separating speed; at rest, or moving away, it gets nothing.
+  const Model flat = square_over_pinned_sheet(0);
+  std::vector<Vec3> start = flat.initial_positions;
+  for (int v = flat.cloths[1].first_vertex; v < int(start.size()); ++v) start[std::size_t(v)].z() = 0.002;
+  const Scalar h = flat.scene.timestep();
+  for (const Scalar speed : {-0.01, 0.0, 0.01}) {
+    std::vector<Vec3> motion = motions(flat, Vec3(0.02, 0, speed));
+    const std::vector<Vec3> before = motion;
+    CollisionPipeline pipeline(flat, CollisionSettings{});
+    const CollisionCounters c = pipeline.resolve(start, 0, h, motion);
+    EXPECT_EQ(c.ccd_hits, 0) << speed;
+    if (speed < 0) {
+      EXPECT_GT(c.proximity_impulses, 0);
+      for (int v = flat.cloths[1].first_vertex; v < int(motion.size()); ++v) {
+        EXPECT_NEAR(motion[std::size_t(v)].z(), 0, 1e-12) << v;
+        EXPECT_NEAR(motion[std::size_t(v)].x(), before[std::size_t(v)].x(), 1e-12) << v;  // frictionless
+      }
+    } else {
+      EXPECT_EQ(c.proximity_impulses, 0) << speed;
+      EXPECT_EQ(motion, before) << speed;
+    }
+  }
+}
+
+TEST(Collision, AnImpactZoneTouchingAPinnedVertexMovesWithIt) {
+  // No impulse rounds: the square's fall onto the pinned sheet goes to impact zones, which
+  // hold pinned vertices; such a zone moves with them (here: not at all), and the pinned
+  // sheet never moves.
+  const Model model = square_over_pinned_sheet(0.3);
+  Model zones_only = model;
+  zones_only.scene.collisions.max_impulse_iterations = 0;
+  const Scalar h = model.scene.timestep();
+  std::vector<Vec3> motion = motions(zones_only, Vec3(0.1, 0.05, -2.0));
+  CollisionPipeline pipeline(zones_only, CollisionSettings{});
+  const CollisionCounters c = pipeline.resolve(zones_only.initial_positions, 0, h, motion);
+  EXPECT_GT(c.impact_zones, 0);
+  EXPECT_EQ(c.fail_safes, 0);
+  int stopped = 0;
+  for (std::size_t v = 0; v < motion.size(); ++v) {
+    if (zones_only.pin_of_vertex[v] >= 0) EXPECT_EQ(motion[v], Vec3::Zero()) << v;
+    stopped += int(v) >= zones_only.cloths[1].first_vertex && motion[v] == Vec3::Zero();
+  }
+  EXPECT_GT(stopped, 0);
+  EXPECT_TRUE(collision_free(zones_only, zones_only.initial_positions, h, motion));
+}
+
+TEST(Collision, TheFailSafeKeepsOnlyTheCollidingVerticesAtTheirStart) {
+  // With no impulse and no impact-zone rounds, a small square falls through the middle of a
+  // large free sheet: the fail-safe stops the vertices of the collisions (their motion
+  // becomes zero), every other vertex keeps its motion, and the step is free.
+  const Model model = build_model(parse_scene(R"({"frame_time": 0.05, "frame_steps": 1,
+    "cloths": [{"grid": {"size": [0.4, 0.4], "resolution": [8, 8]}},
+               {"grid": {"size": [0.02, 0.02], "resolution": [1, 1]}, "transform": {"translate": [0.013, 0.007, 0.02]}}],
+    "collisions": {"self": true, "thickness": 0.003, "max_impulse_iterations": 0, "max_zone_iterations": 0}})",
+                                              "inline.json"));
+  const Scalar h = model.scene.timestep();
+  std::vector<Vec3> motion = motions(model, Vec3(0, 0, -2.0), Vec3(0, 0, 0.1));
+  const std::vector<Vec3> before = motion;
+  CollisionPipeline pipeline(model, CollisionSettings{});
+  const CollisionCounters c = pipeline.resolve(model.initial_positions, 0, h, motion);
+  EXPECT_EQ(c.fail_safes, 1);
+  int stopped = 0, kept = 0;
+  for (std::size_t v = 0; v < motion.size(); ++v) {
+    if (motion[v] == Vec3::Zero()) {
+      ++stopped;
+    } else {
+      EXPECT_EQ(motion[v], before[v]) << v;
+      ++kept;
+    }
+  }
+  EXPECT_GT(stopped, 0);
+  EXPECT_GT(kept, stopped);  // the sheet's far part is untouched
+  EXPECT_TRUE(collision_free(model, model.initial_positions, h, motion));
 }
