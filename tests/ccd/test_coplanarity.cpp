@@ -23,6 +23,19 @@ Scalar direct(QueryKind kind, const Query& q, Scalar t) {
   return (x[1] - x[0]).cross(x[2] - x[0]).dot(x[3] - x[0]);
 }
 
+// A test oracle: the power-basis coefficients a0..a3 by the paper's formulas (Provot's form),
+// written apart from the library's Bernstein form to check it.
+Power3 coplanarity_power(QueryKind kind, const Query& query) {
+  const auto order = coplanarity_order(kind);
+  const auto x = [&](int i) -> const Vec3& { return query.start[order[i - 1]]; };
+  const auto v = [&](int i) -> Vec3 { return query.end[order[i - 1]] - query.start[order[i - 1]]; };
+  const Vec3 x21 = x(2) - x(1), x31 = x(3) - x(1), x41 = x(4) - x(1);
+  const Vec3 v21 = v(2) - v(1), v31 = v(3) - v(1), v41 = v(4) - v(1);
+  const Vec3 mixed = v21.cross(x31) + x21.cross(v31);
+  return {x21.cross(x31).dot(x41), mixed.dot(x41) + x21.cross(x31).dot(v41),
+          v21.cross(v31).dot(x41) + mixed.dot(v41), v21.cross(v31).dot(v41)};
+}
+
 Query random_query(std::mt19937_64& rng) {
   std::uniform_real_distribution<Scalar> u(-1, 1);
   Query q;

@@ -112,8 +112,4 @@ inline bool filter_culls(const CoplanarityCubic& c) { return !cubic_poorly_resol
 /// bit for bit (the batch entry point computes the cubics of many tests at once).
 Result elementary_ccd(QueryKind kind, const Query& query, const Options& options, const CoplanarityCubic& cubic);
 
-/// Power-basis coefficients a0..a3 by the formulas of the paper (Provot's form). Used to check
-/// the Bernstein form.
-Power3 coplanarity_power(QueryKind kind, const Query& query);
-
 }  // namespace drape::ccd
