@@ -22,13 +22,6 @@
 
 namespace drape {
 
-// Two directions from a cloth vertex to an obstacle closer than this cosine are one contact
-// of the implicit solve (mesh_contacts): the nearest of them is kept.
-inline constexpr Scalar SAME_DIRECTION = 0.95;
-// An edge-edge or obstacle-vertex contact of the implicit solve is kept only when its closest
-// points lie inside both features by more than this weight; otherwise it is a cloth vertex's
-// contact with an obstacle's triangle, found as such.
-inline constexpr Scalar INNER_WEIGHT = 0.01;
 // The simultaneous impulses of a round (Impl::impulses): at most this many Gauss-Seidel sweeps,
 // fewer once no impulse changes by more than IMPULSE_TOLERANCE times thickness / h.
 inline constexpr int IMPULSE_SWEEPS = 100;

@@ -4,6 +4,7 @@
 #include <chrono>
 #include <optional>
 
+#include "drape/ccd/distance.h"
 #include "drape/core/obstacle.h"
 #include "integrator_workspace.h"
 #include "projective.h"
@@ -240,6 +241,67 @@ StepReport Integrator::advance(State& state) {
   return report;
 }
 
+namespace {
+
+// A cloth triangle's or edge's contact with a sphere that comes between its corners: where its
+// point nearest the centre lies inside it (every weight above INNER_WEIGHT, or inside an edge)
+// within FACE_DEPTH_FRACTION of reach of the surface, and not every corner has its own contact
+// with the sphere in about that direction (then theirs hold it, and a face's would
+// over-determine the solve).
+// Each edge once, each contact the nearest point's (as a mesh obstacle's vertex under a cloth
+// triangle is held, CollisionPipeline::mesh_contacts).
+void add_sphere_face_contacts(const Model& m, const PosedShape& shape, Scalar t, const std::vector<Vec3>& x,
+                              const std::vector<int>& free_index, Scalar reach, std::vector<SolveContact>& contacts) {
+  const Scalar out_to = shape.radius + FACE_DEPTH_FRACTION * reach;
+  const auto touching = [&](int v, const Vec3& normal) {
+    const auto [distance, radial] = shape.distance(x[std::size_t(v)]);
+    return distance < reach && radial.dot(normal) > SAME_DIRECTION;
+  };
+  std::vector<std::array<int, 2>> edges_done;
+  for (const Triangle& tri : m.triangles) {
+    if (free_index[std::size_t(tri[0])] < 0 || free_index[std::size_t(tri[1])] < 0 || free_index[std::size_t(tri[2])] < 0)
+      continue;
+    const Vec3 &a = x[std::size_t(tri[0])], &b = x[std::size_t(tri[1])], &c = x[std::size_t(tri[2])];
+    const Scalar longest = std::max((b - a).norm(), (c - a).norm());
+    if ((a - shape.point).norm() - longest >= out_to) continue;  // every point of it is farther
+    const auto closest = ccd::closest_point_triangle<Scalar>(shape.point, a, b, c);
+    if (!(closest.distance_squared < out_to * out_to) || !(closest.distance_squared > 0)) continue;
+    const std::array<Scalar, 3> w{1 - closest.weight_b - closest.weight_c, closest.weight_b, closest.weight_c};
+    int inner = 0, outer = -1;
+    for (int k = 0; k < 3; ++k) {
+      if (w[k] > INNER_WEIGHT) ++inner;
+      else outer = k;
+    }
+    if (inner < 2) continue;  // a corner's: the vertex contacts
+    SolveContact contact;
+    contact.count = 0;
+    for (int k = 0; k < 3; ++k)
+      if (k != outer) {
+        contact.vertex[std::size_t(contact.count)] = tri[k];
+        contact.weight[std::size_t(contact.count)] = w[k];
+        ++contact.count;
+      }
+    if (contact.count == 2) {
+      std::array<int, 2> edge{std::min(contact.vertex[0], contact.vertex[1]), std::max(contact.vertex[0], contact.vertex[1])};
+      if (std::find(edges_done.begin(), edges_done.end(), edge) != edges_done.end()) continue;
+      edges_done.push_back(edge);
+      const Scalar sum = contact.weight[0] + contact.weight[1];
+      contact.weight[0] /= sum, contact.weight[1] /= sum;
+    }
+    const Vec3 offset = closest.point - shape.point;
+    contact.distance = offset.norm() - shape.radius;
+    contact.normal = offset.normalized();
+    bool covered = true;
+    for (int i = 0; i < contact.count && covered; ++i) covered = touching(contact.vertex[std::size_t(i)], contact.normal);
+    if (covered) continue;
+    contact.surface_velocity = body_velocity(shape.obstacle->spec.motion, shape.point + shape.radius * contact.normal, t);
+    contact.target = contact.normal.dot(contact.surface_velocity);
+    contacts.push_back(contact);
+  }
+}
+
+}  // namespace
+
 void Integrator::find_contacts(const State& state) {
   const Model& m = model_;
   Workspace& w = *work_;
@@ -264,6 +326,7 @@ void Integrator::find_contacts(const State& state) {
       contact.analytic = true;
       w.contacts.push_back(contact);
     }
+    if (shape.sphere) add_sphere_face_contacts(m, shape, state.time, state.positions, w.free_index, reach, w.contacts);
   }
   if (collisions_) {
     const auto mesh = collisions_->mesh_contacts(state.positions, state.time, h, reach);

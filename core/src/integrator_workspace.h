@@ -22,6 +22,7 @@ inline constexpr Scalar RESPONSE_HOLD = 1e8;
 // it starts within this many thicknesses of it: a little more than one, since the response
 // leaves a resting vertex at the thickness.
 inline constexpr Scalar CONTACT_REACH = 1.1;
+
 // A change of the step's motion smaller than this fraction of the thickness is negligible: a
 // vertex the response moved by less is not held for the re-solve, and a held contact that would
 // pull its vertex by less is not released (Integrator::advance, solve_linearised).

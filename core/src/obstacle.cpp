@@ -1,6 +1,8 @@
 #include "drape/core/obstacle.h"
 
 #include <algorithm>
+#include <array>
+#include <cmath>
 #include <limits>
 #include <tuple>
 
@@ -60,6 +62,99 @@ std::optional<SurfaceContact> push_out(const PosedShape& shape, Scalar t_next, c
   return c;
 }
 
+namespace {
+
+// Sweeps over the triangles against a sphere, each pushing out the faces it reaches, until one
+// moves none: neighbouring faces share corners, and a push may bring the next face back in.
+constexpr int FACE_SWEEPS = 8;
+
+// The projection's friction on one cloth point's motion and velocity (the point in contact:
+// a vertex, or a triangle's closest point to a sphere, by its weights), changed in place: from
+// the normal change the projection made to the motion (pushed, m/s), Coulomb friction on the
+// motion's slide relative to the surface; the velocity loses its approaching normal part and
+// feels Coulomb friction from that.
+void projection_friction(const SurfaceContact& c, Scalar mu, Scalar pushed, Vec3& motion, Vec3& velocity) {
+  // Friction on the motion too: without it the projection slides a vertex along the surface
+  // by the tangential part of its whole step (a cloth landing on a sphere spread outward, its
+  // springs stretched: energy grew).
+  const Vec3 slide = motion - c.surface_velocity;
+  const Vec3 slide_tangential = slide - slide.dot(c.normal) * c.normal;
+  const Scalar slide_speed = slide_tangential.norm();
+  if (slide_speed > 0 && pushed > 0) motion -= slide_tangential * std::min<Scalar>(1, mu * pushed / slide_speed);
+  const Vec3 relative = velocity - c.surface_velocity;
+  const Scalar normal_speed = relative.dot(c.normal);
+  if (normal_speed >= 0) return;  // already separating
+  Vec3 tangential = relative - normal_speed * c.normal;
+  const Scalar speed = tangential.norm();
+  if (speed > 0) tangential *= std::max<Scalar>(0, 1 - mu * -normal_speed / speed);
+  velocity = c.surface_velocity + tangential;
+}
+
+// A sphere between a cloth triangle's corners (all of them outside it): the triangle's
+// closest point to the centre at the step's end, when it lies within depth of the surface
+// (outside the corners: theirs are the vertex projection's), moves out to depth along the
+// direction from the centre, its corners sharing the change by weight and inverse mass as an
+// impulse would (Bridson, Fedkiw and Anderson 2002, section 7.2); friction as a vertex's.
+// The side is the one the point was on at the step's start. Returns whether it moved.
+bool push_face_out(const Model& model, const PosedShape& at_start, const PosedShape& shape, Scalar t_next,
+                   const std::vector<Vec3>& start, Scalar h, Scalar depth, const Triangle& tri, std::vector<Vec3>& motion,
+                   std::vector<Vec3>* velocities) {
+  std::array<Vec3, 3> end;
+  std::array<Scalar, 3> inverse_mass{};
+  Scalar longest = 0;
+  for (int k = 0; k < 3; ++k) {
+    const std::size_t v = std::size_t(tri[k]);
+    end[k] = start[v] + h * motion[v];
+    if (model.pin_of_vertex[v] < 0) inverse_mass[k] = 1 / model.masses[v];
+  }
+  for (int k = 1; k < 3; ++k) longest = std::max(longest, (end[k] - end[0]).norm());
+  const Scalar reach = shape.radius + depth;
+  if ((end[0] - shape.point).norm() - longest >= reach) return false;  // every point of it is farther
+  const auto closest = ccd::closest_point_triangle<Scalar>(shape.point, end[0], end[1], end[2]);
+  const std::array<Scalar, 3> w{1 - closest.weight_b - closest.weight_c, closest.weight_b, closest.weight_c};
+  if (!(closest.distance_squared < reach * reach) || std::max({w[0], w[1], w[2]}) >= 1) return false;
+  Scalar share = 0;  // sum w_k^2 / m_k
+  for (int k = 0; k < 3; ++k) share += w[k] * w[k] * inverse_mass[k];
+  if (!(share > 0)) return false;
+  // The side: the closest point's at the start, from the centre then.
+  const auto before = ccd::closest_point_triangle<Scalar>(at_start.point, start[std::size_t(tri[0])],
+                                                          start[std::size_t(tri[1])], start[std::size_t(tri[2])]);
+  const Vec3 side = before.point - at_start.point;
+  Vec3 offset = closest.point - shape.point;
+  const Scalar distance = offset.norm();
+  Vec3 normal = distance > 0 ? Vec3(offset / distance) : Vec3(side.normalized());
+  if (normal.dot(side) < 0) normal = -normal;
+  const Scalar along = offset.dot(normal);  // negative where the centre crossed the triangle
+  const Scalar push = (reach - along) / h;    // the closest point's normal motion change, m/s
+  if (!(push > 0) || !std::isfinite(push)) return false;
+  SurfaceContact c;
+  c.signed_distance = along - shape.radius;
+  c.normal = normal;
+  c.surface_velocity = body_velocity(shape.obstacle->spec.motion, shape.point + shape.radius * normal, t_next);
+  Vec3 point_motion = Vec3::Zero(), point_velocity = Vec3::Zero();
+  for (int k = 0; k < 3; ++k) point_motion += w[k] * motion[std::size_t(tri[k])];
+  const Vec3 motion_before = point_motion;
+  point_motion += push * normal;
+  Vec3 velocity_change = Vec3::Zero();
+  if (velocities) {
+    for (int k = 0; k < 3; ++k) point_velocity += w[k] * (*velocities)[std::size_t(tri[k])];
+    const Vec3 velocity_before = point_velocity;
+    projection_friction(c, model.scene.friction, push, point_motion, point_velocity);
+    velocity_change = point_velocity - velocity_before;
+  }
+  const Vec3 motion_change = point_motion - motion_before;
+  // The point's change d is made by corner changes w_k / m_k * d / share.
+  for (int k = 0; k < 3; ++k) {
+    const std::size_t v = std::size_t(tri[k]);
+    const Scalar part = w[k] * inverse_mass[k] / share;
+    motion[v] += part * motion_change;
+    if (velocities) (*velocities)[v] += part * velocity_change;
+  }
+  return true;
+}
+
+}  // namespace
+
 int keep_out_of_analytic_obstacles(const Model& model, const std::vector<Vec3>& start, Scalar t_next, Scalar h,
                                    Scalar depth, std::vector<Vec3>& motion, std::vector<Vec3>* velocities) {
   const Scalar mu = model.scene.friction;
@@ -74,23 +169,18 @@ int keep_out_of_analytic_obstacles(const Model& model, const std::vector<Vec3>& 
       if (!contact) continue;
       ++contacts;
       if (!velocities) continue;
-      const SurfaceContact& c = *contact;
-      // Friction on the motion too, from the normal change the projection made: without it
-      // the projection slides a vertex along the surface by the tangential part of its whole
-      // step (a cloth landing on a sphere spread outward, its springs stretched: energy grew).
-      const Scalar pushed = (motion[v] - before).dot(c.normal);
-      const Vec3 slide = motion[v] - c.surface_velocity;
-      const Vec3 slide_tangential = slide - slide.dot(c.normal) * c.normal;
-      const Scalar slide_speed = slide_tangential.norm();
-      if (slide_speed > 0 && pushed > 0) motion[v] -= slide_tangential * std::min<Scalar>(1, mu * pushed / slide_speed);
-      Vec3& velocity = (*velocities)[v];
-      const Vec3 relative = velocity - c.surface_velocity;
-      const Scalar normal_speed = relative.dot(c.normal);
-      if (normal_speed >= 0) continue;  // already separating
-      Vec3 tangential = relative - normal_speed * c.normal;
-      const Scalar speed = tangential.norm();
-      if (speed > 0) tangential *= std::max<Scalar>(0, 1 - mu * -normal_speed / speed);
-      velocity = c.surface_velocity + tangential;
+      projection_friction(*contact, mu, (motion[v] - before).dot(contact->normal), motion[v], (*velocities)[v]);
+    }
+    // A sphere can pass between the corners of a triangle; a plane cannot (a triangle's
+    // deepest point below it is a corner). Sweeps, since neighbouring faces share corners.
+    if (!shape.sphere) continue;
+    const PosedShape at_start = pose_shape(obstacle, t_next - h);
+    for (int sweep = 0; sweep < FACE_SWEEPS; ++sweep) {
+      int moved = 0;
+      for (const Triangle& tri : model.triangles)
+        moved += push_face_out(model, at_start, shape, t_next, start, h, FACE_DEPTH_FRACTION * depth, tri, motion, velocities);
+      contacts += moved;
+      if (moved == 0) break;
     }
   }
   return contacts;

@@ -26,8 +26,9 @@ struct Ran {
   Scalar scale = 0;
 };
 
-Ran run(const Model& model, const std::string& name, int frames = 0) {
+Ran run(const Model& model, const std::string& name, int frames = 0, bool check = false) {
   RunSettings settings;
+  settings.check_penetrations = check;
   settings.out = drape::testing::temp_root("energy") / name;
   fs::remove_all(settings.out);
   settings.frames = frames > 0 ? frames : model.scene.frames;
@@ -173,6 +174,42 @@ TEST(Energy, ARisingSpheresWorkThroughHeldContactsIsCountedInTheBound) {
   // Lifted by about 0.6 m, and the counted work paid for it.
   EXPECT_GT(ran.frames.back().potential_energy, ran.frames.front().potential_energy + 0.1);
   EXPECT_GT(ran.frames.back().external_work, ran.frames.back().potential_energy - ran.frames.front().potential_energy);
+}
+
+// A curtain of 6 cm cells, pinned along its top, struck at mid-height by a 10 cm ball moving
+// at 2, 4 and 8 m/s (frictionless at 8): the ball comes between the vertices of a cell, so a
+// response that holds the cloth out of a sphere vertex by vertex let it pass through the cloth
+// (issue 19: triangles 3.7 cm inside the sphere, 29 crossing pairs in 25 frames at 2 m/s with
+// vertices alone). The faces' contacts keep every triangle out of the ball (and the cloth out
+// of itself as it swings back) in every frame, the energy within its bound, and the cloth from
+// stretching. At 8 m/s the impact's frame ends 0.08 J (3.5 % of the energy scale) above the
+// bound: within the scene's warning limit, not within the hundredth the slower strikes keep.
+TEST(Energy, APinnedCurtainStruckByABallStaysOutOfItWithinItsBound) {
+  for (const auto& [speed, friction] : {std::pair{2.0, 0.3}, std::pair{4.0, 0.3}, std::pair{8.0, 0.3}, std::pair{8.0, 0.0}}) {
+    const std::string json = R"({"frame_time": 0.033333333333333333, "frame_steps": 10, "frames": 25,
+      "cloths": [{"grid": {"size": [1.0, 1.0], "resolution": [16, 16]},
+                  "transform": {"translate": [0, 0, 1.5], "rotate": [90, 1, 0, 0]},
+                  "material": {"density": 0.15, "stretch": 2000, "shear": 200, "bend": 0.2, "damping": 0.002}}],
+      "handles": [{"cloth": 0, "box": {"min": [-1, -1, 1.99], "max": [1, 1, 2.01]}}],
+      "obstacles": [{"sphere": {"center": [0.05, -0.6, 1.45], "radius": 0.1},
+                     "motion": {"velocity": [0, )" + std::to_string(speed) + R"(, 0], "end": )" +
+                             std::to_string(2.4 / speed) + R"(}}],
+      "friction": )" + std::to_string(friction) + R"(, "collisions": {"self": true, "thickness": 0.005}})";
+    const Model model = build_model(parse_scene(json, "curtain.json"));
+    const std::string name = "curtain at " + std::to_string(speed) + " m/s, friction " + std::to_string(friction);
+    const Ran ran = run(model, "curtain", 0, true);
+    if (speed < 5) {
+      expect_within_bound(ran, name);
+    } else {
+      EXPECT_EQ(ran.outcome.end, RunEnd::Completed) << name << ": " << ran.outcome.message;
+      for (const FrameStats& s : ran.frames) EXPECT_EQ(s.warnings, 0) << name << " frame " << s.frame;
+    }
+    for (const FrameStats& s : ran.frames) {
+      EXPECT_EQ(s.penetrations.value_or(-1), 0) << name << " frame " << s.frame;
+      EXPECT_LT(s.max_stretch, 1.05) << name << " frame " << s.frame;
+    }
+    EXPECT_GT(ran.frames.back().external_work, 0) << name;  // the ball did push the cloth
+  }
 }
 
 // A cloth placed 5 cm under the ground is pushed out of it: energy no source gave (about 4 %

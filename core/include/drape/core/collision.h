@@ -67,6 +67,15 @@ struct CollisionCounters {
 /// in the statistics as rest_clamped_pairs). Empty when nothing to say.
 std::string thickness_note(const Model& model);
 
+/// Two directions from a cloth feature to an obstacle closer than this cosine (about 18
+/// degrees) are one contact of the implicit solve: the nearest is kept, and an edge's or
+/// face's contact is left to its corners' own when each has one in such a direction.
+constexpr Scalar SAME_DIRECTION = 0.95;
+/// An edge's or face's contact of the implicit solve is kept only where its closest point lies
+/// inside the feature (each of its weights, and the obstacle feature's, above this);
+/// otherwise it is a vertex's contact, found as such.
+constexpr Scalar INNER_WEIGHT = 0.01;
+
 /// A contact the implicit solve keeps (Baraff and Witkin 1998, section 5.3: a constraint on
 /// the velocity along the contact's normal; here held by a penalty): the relative velocity of
 /// its cloth points, sum_k weight_k v_k over its cloth vertices (a vertex; an edge's two, by

@@ -47,10 +47,19 @@ SurfaceContact analytic_contact(const PosedShape& shape, Scalar t, const Vec3& x
 std::optional<SurfaceContact> push_out(const PosedShape& shape, Scalar t_next, const Vec3& start, Scalar h, Scalar depth,
                                        Vec3& motion);
 
+/// A cloth face or edge keeps this fraction of its corners' depth (or reach) from a sphere:
+/// enough that it never touches it, and little enough that a cloth resting on a sphere with its
+/// corners at the depth is not pushed off by its faces' sag between them (a chord of length L
+/// sags L^2 / (8 r) towards a sphere of radius r: only meshes coarser than 2 sqrt(r depth)
+/// reach it, such as a curtain of 6 cm cells struck by a 10 cm ball).
+constexpr Scalar FACE_DEPTH_FRACTION = 0.5;
+
 /// Keeps every free cloth vertex (no handle) out of the spheres and planes over a step from
 /// start ending at t_next (Bridson, Fedkiw and Anderson 2002, section 7.1): one whose
 /// predicted position start + h motion lies within depth of a surface moves (push_out) to land
-/// at depth on it. With velocities (the response after the solve, at the thickness), the
+/// at depth on it; then a sphere that comes between a triangle's corners (its closest point
+/// inside the triangle within FACE_DEPTH_FRACTION of depth of the surface) pushes the
+/// triangle out to that depth, the corners sharing the change by weight and inverse mass. With velocities (the response after the solve, at the thickness), the
 /// motion also feels Coulomb friction from that push, and the velocity loses its approaching
 /// normal part and feels Coulomb friction relative to the surface; without (the collision
 /// pipeline between its rounds), only the motion changes. Returns how many vertices moved.
