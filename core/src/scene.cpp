@@ -88,6 +88,14 @@ class Node {
     return x;
   }
   Scalar non_negative() const { return number_in(0, std::numeric_limits<Scalar>::max(), ">= 0"); }
+  /// A number in (0, most] (or [0, most] with zero allowed), most given with its unit.
+  Scalar up_to(Scalar most, const std::string& unit, bool zero_allowed = false) const {
+    const Scalar x = number();
+    if (!((zero_allowed ? x >= 0 : x > 0) && x <= most))
+      fail(std::string("expected a number ") + (zero_allowed ? ">= 0" : "> 0") + " and at most " + format_number(most) +
+           (unit.empty() ? "" : " " + unit) + ", found " + describe(value_));
+    return x;
+  }
   int integer_in(int lo, int hi) const {
     if (!value_.is_number_integer()) fail("expected an integer, found " + describe(value_));
     const auto x = value_.get<long long>();
@@ -231,17 +239,18 @@ ClothSpec read_cloth(const Node& n) {
           .fail("expected 'tensile_stiffness' and 'shear_stiffness' together (N/m): a grid's springs need both");
     if (m.has("bend") && m.has("bending_rigidity"))
       m.at("bending_rigidity").fail("expected one bending model: 'bend' (springs) or 'bending_rigidity' (N m, hinges), not both");
-    if (m.has("density")) c.material.density = m.at("density").positive();
-    if (m.has("mass_per_area")) c.material.density = m.at("mass_per_area").positive() / 1000;  // g/m^2
-    if (m.has("tensile_stiffness")) c.material.tensile_stiffness = m.at("tensile_stiffness").positive();
-    if (m.has("shear_stiffness")) c.material.shear_stiffness = m.at("shear_stiffness").positive();
+    if (m.has("density")) c.material.density = m.at("density").up_to(MAX_AREAL_DENSITY, "kg/m^2");
+    if (m.has("mass_per_area")) c.material.density = m.at("mass_per_area").up_to(1000 * MAX_AREAL_DENSITY, "g/m^2") / 1000;
+    if (m.has("tensile_stiffness")) c.material.tensile_stiffness = m.at("tensile_stiffness").up_to(MAX_STIFFNESS, "N/m");
+    if (m.has("shear_stiffness")) c.material.shear_stiffness = m.at("shear_stiffness").up_to(MAX_STIFFNESS, "N/m");
     if (fabric) c.material.bend = 0;  // bending, if any, from the rigidity
-    if (m.has("stretch")) c.material.stretch = m.at("stretch").non_negative();
-    if (m.has("shear")) c.material.shear = m.at("shear").non_negative();
-    if (m.has("bend")) c.material.bend = m.at("bend").non_negative();
-    if (m.has("bending_rigidity")) c.material.bending_rigidity = m.at("bending_rigidity").positive();  // no bending: `bend` 0
-    if (m.has("damping")) c.material.damping = m.at("damping").non_negative();
-    if (m.has("air_damping")) c.material.air_damping = m.at("air_damping").non_negative();
+    if (m.has("stretch")) c.material.stretch = m.at("stretch").up_to(MAX_STIFFNESS, "N", true);
+    if (m.has("shear")) c.material.shear = m.at("shear").up_to(MAX_STIFFNESS, "N", true);
+    if (m.has("bend")) c.material.bend = m.at("bend").up_to(MAX_STIFFNESS, "N", true);
+    if (m.has("bending_rigidity"))  // no bending: `bend` 0
+      c.material.bending_rigidity = m.at("bending_rigidity").up_to(MAX_BENDING_RIGIDITY, "N m");
+    if (m.has("damping")) c.material.damping = m.at("damping").up_to(MAX_DAMPING, "s", true);
+    if (m.has("air_damping")) c.material.air_damping = m.at("air_damping").up_to(MAX_DAMPING, "1/s", true);
     if (m.has("strain_limit"))
       c.material.strain_limit = m.at("strain_limit").number_in(MIN_STRAIN_LIMIT, MAX_STRAIN_LIMIT, "from 1.001 to 10");
   }
@@ -403,11 +412,11 @@ Scene parse_scene(const std::string& text, const std::filesystem::path& file) {
     w.allow({"velocity", "density", "drag"});
     WindSpec wind;
     if (w.has("velocity")) wind.velocity = w.at("velocity").vec3_within(MAX_SPEED, "m/s");
-    if (w.has("density")) wind.density = w.at("density").non_negative();
-    if (w.has("drag")) wind.drag = w.at("drag").non_negative();
+    if (w.has("density")) wind.density = w.at("density").up_to(MAX_FLUID_DENSITY, "kg/m^3", true);
+    if (w.has("drag")) wind.drag = w.at("drag").up_to(MAX_COEFFICIENT, "", true);
     s.wind = wind;
   }
-  if (n.has("friction")) s.friction = n.at("friction").non_negative();
+  if (n.has("friction")) s.friction = n.at("friction").up_to(MAX_COEFFICIENT, "", true);
   if (n.has("solver")) {
     const Node v = n.at("solver");
     v.allow({"type", "tolerance", "max_iterations", "max_halvings", "iterations", "chebyshev", "history", "factor_reuse"});

@@ -45,6 +45,12 @@ inline constexpr Scalar MAX_CHEBYSHEV_RHO = 0.9999;     ///< solver.chebyshev
 inline constexpr int MAX_PROJECTIVE_HISTORY = 100;        ///< solver.history
 inline constexpr int MAX_FACTOR_REUSE = 1000;             ///< solver.factor_reuse
 inline constexpr Scalar MAX_THICKNESS_OF_CLOTH = 0.25;  ///< collisions.thickness at most this times each cloth's diagonal
+inline constexpr Scalar MAX_AREAL_DENSITY = 1e6;    ///< kg/m^2: material.density (1e9 g/m^2 as mass_per_area)
+inline constexpr Scalar MAX_STIFFNESS = 1e9;        ///< N/m (tensile, shear) or N (stretch, shear, bend springs)
+inline constexpr Scalar MAX_BENDING_RIGIDITY = 1e3; ///< N m: material.bending_rigidity
+inline constexpr Scalar MAX_DAMPING = 1e6;          ///< s (material.damping) and 1/s (air_damping)
+inline constexpr Scalar MAX_FLUID_DENSITY = 1e4;    ///< kg/m^3: wind.density
+inline constexpr Scalar MAX_COEFFICIENT = 100;      ///< friction, wind.drag
 inline constexpr Scalar MIN_FRAME_TIME = 1e-6;    ///< s
 inline constexpr Scalar MAX_FRAME_TIME = 60;      ///< s
 
