@@ -82,6 +82,29 @@ inline std::vector<std::pair<int, std::filesystem::path>> run_folder_frames(cons
   return frames;
 }
 
+/// The last frame stats.csv has a whole row for (its first cell), or -1 without the file or a
+/// row: a run writes each frame's mesh before its row, so the meshes must reach it.
+inline int last_frame_in_stats(const std::filesystem::path& folder) {
+  const std::filesystem::path stats = folder / "stats.csv";
+  std::error_code error;
+  if (!std::filesystem::exists(stats, error)) return -1;
+  std::string text;
+  try {
+    text = ccd::read_input_file(stats, ccd::MAX_MESH_BYTES, "statistics");
+  } catch (const ccd::InputFileError& e) {
+    throw RunFolderError(e.what());
+  }
+  int last = -1;
+  std::istringstream lines(text);
+  std::string line;
+  for (std::getline(lines, line); std::getline(lines, line);) {  // the header first
+    int frame = 0;
+    const auto [end, problem] = std::from_chars(line.data(), line.data() + line.size(), frame);
+    if (problem == std::errc() && end != line.data() + line.size() && *end == ',') last = std::max(last, frame);
+  }
+  return last;
+}
+
 /// A run folder opened for reading: its model and its saved frames.
 struct RunFolder {
   Model model;
@@ -92,9 +115,11 @@ struct RunFolder {
 /// listed, no frames) after "drape <command>: " and returns nullopt: bad input, status 2.
 inline std::optional<RunFolder> open_run_folder(const std::filesystem::path& folder, const std::string& command) {
   RunFolder run;
+  int last_in_stats = -1;
   try {
     run.model = build_model(run_folder_scene(folder));
     run.frames = run_folder_frames(folder);
+    last_in_stats = last_frame_in_stats(folder);
   } catch (const SceneError& e) {
     std::cerr << "drape " << command << ": " << e.what() << "\n";
     return std::nullopt;
@@ -115,13 +140,16 @@ inline std::optional<RunFolder> open_run_folder(const std::filesystem::path& fol
     if (missing.size() > 5) break;
     if (frame == expected) ++expected;
   }
+  // Frames lost from the end: stats.csv has their rows.
+  for (int frame = run.frames.back().first + 1; frame <= last_in_stats && missing.size() <= 5; ++frame)
+    missing.push_back(frame);
   if (!missing.empty()) {
     std::string list;
     for (std::size_t i = 0; i < std::min<std::size_t>(missing.size(), 5); ++i)
       list += (i ? ", " : "") + std::to_string(missing[i]);
     std::cerr << "drape " << command << ": " << folder.string() << ": frame" << (missing.size() > 1 ? "s " : " ") << list
               << (missing.size() > 5 ? " and more" : "") << " missing (the folder has frames up to "
-              << run.frames.back().first << ")\n";
+              << run.frames.back().first << ", stats.csv rows up to " << last_in_stats << ")\n";
     return std::nullopt;
   }
   return run;

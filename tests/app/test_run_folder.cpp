@@ -106,7 +106,24 @@ TEST(RunFolder, CheckAndRenderReportAMissingFrame) {
   for (const std::string& command : {"check " + out.string(), "render --no-video --quiet --resolution 32x32 " + out.string()}) {
     const Outcome outcome = run_drape(command);
     EXPECT_EQ(outcome.status, 2) << command << ": " << outcome.output;
-    EXPECT_NE(outcome.output.find(out.string() + ": frame 1 missing (the folder has frames up to 3)"), std::string::npos)
+    EXPECT_NE(outcome.output.find(out.string() + ": frame 1 missing (the folder has frames up to 3, stats.csv rows up to 3)"),
+              std::string::npos)
+        << command << ": " << outcome.output;
+  }
+}
+
+// Frames lost from the end leave no gap among the others: stats.csv, written after each frame's
+// mesh, still lists them.
+TEST(RunFolder, CheckAndRenderReportFramesLostFromTheEnd) {
+  const fs::path out = temp_dir("missing_last");
+  ASSERT_EQ(run_drape("run " + SOURCE + "/scenes/hanging.json --frames 4 --quiet --out " + out.string()).status, 0);
+  fs::remove(out / "frame_00003.obj");
+  fs::remove(out / "frame_00004.obj");
+  for (const std::string& command : {"check " + out.string(), "render --no-video --quiet --resolution 32x32 " + out.string()}) {
+    const Outcome outcome = run_drape(command);
+    EXPECT_EQ(outcome.status, 2) << command << ": " << outcome.output;
+    EXPECT_NE(outcome.output.find(out.string() + ": frames 3, 4 missing (the folder has frames up to 2, stats.csv rows up to 4)"),
+              std::string::npos)
         << command << ": " << outcome.output;
   }
 }
