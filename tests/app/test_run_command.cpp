@@ -121,6 +121,28 @@ TEST(RunCommand, AStoppedRunSaysWhyAndKeepsItsFrames) {
   for (const auto& line : stats) EXPECT_EQ(count_fields(line), count_fields(stats[0]));
 }
 
+// A cloth placed 5 cm under the ground is pushed out of it, energy no source gave: with low
+// limits the run says so on the terminal even with --quiet, counts it in stats.csv, and stops
+// with status 3 past the second limit, keeping its frames.
+TEST(RunCommand, EnergyPastTheLimitsWarnsOnTheTerminalAndStops) {
+  const std::string under = R"({"frames": 5, "cloths": [{"grid": {"resolution": [4, 4]}, "transform": {"translate": [0, 0, -0.05]}}],
+    "obstacles": [{"plane": {}}], "limits": {"energy_warn": 0.01, "energy_stop": )";
+  const fs::path warned = temp_dir("under_warned");
+  const Outcome warn = run_drape("run " + write_scene("under_warn", under + "1}}").string() + " --quiet --out " + warned.string());
+  EXPECT_EQ(warn.status, 0) << warn.output;
+  EXPECT_NE(warn.output.find("drape run: warning: frame 1: energy"), std::string::npos) << warn.output;
+  EXPECT_NE(warn.output.find(" frame(s) passed a limit (column warnings of stats.csv"), std::string::npos) << warn.output;
+  const auto rows = lines(warned / "stats.csv");
+  ASSERT_EQ(rows.size(), 7u);
+  EXPECT_EQ(rows[2].substr(rows[2].rfind(',') + 1), "1") << rows[2];  // warnings, the last column
+  const fs::path stopped = temp_dir("under_stopped");
+  const Outcome stop = run_drape("run " + write_scene("under_stop", under + "0.02}}").string() + " --quiet --out " + stopped.string());
+  EXPECT_EQ(stop.status, 3) << stop.output;
+  EXPECT_NE(stop.output.find("drape run: stopped: frame 1: energy"), std::string::npos) << stop.output;
+  EXPECT_TRUE(fs::exists(stopped / "frame_00001.obj"));
+  EXPECT_EQ(lines(stopped / "stats.csv").size(), 3u);
+}
+
 TEST(RunCommand, InterruptKeepsEveryFinishedFrame) {
   const fs::path out = temp_dir("interrupted");
   const pid_t child = fork();
