@@ -68,6 +68,10 @@ namespace {
 // moves none: neighbouring faces share corners, and a push may bring the next face back in.
 constexpr int FACE_SWEEPS = 8;
 
+// A face's push is made only where the corners that may move hold at least this much of the
+// point's weight: at most twice the point's change for one free corner.
+constexpr Scalar MIN_FREE_WEIGHT = 0.5;
+
 // The projection's friction on one cloth point's motion and velocity (the point in contact:
 // a vertex, or a triangle's closest point to a sphere, by its weights), changed in place: from
 // the normal change the projection made to the motion (pushed, m/s), Coulomb friction on the
@@ -114,8 +118,14 @@ bool push_face_out(const Model& model, const PosedShape& at_start, const PosedSh
   const std::array<Scalar, 3> w{1 - closest.weight_b - closest.weight_c, closest.weight_b, closest.weight_c};
   if (!(closest.distance_squared < reach * reach) || std::max({w[0], w[1], w[2]}) >= 1) return false;
   Scalar share = 0;  // sum w_k^2 / m_k
-  for (int k = 0; k < 3; ++k) share += w[k] * w[k] * inverse_mass[k];
-  if (!(share > 0)) return false;
+  Scalar free_weight = 0;  // of the corners that may move
+  for (int k = 0; k < 3; ++k) {
+    share += w[k] * w[k] * inverse_mass[k];
+    if (inverse_mass[k] > 0) free_weight += w[k];
+  }
+  // A point nearer a triangle's pinned corners than its free ones is the handle's to hold: the
+  // free corners would move 1 / free_weight times as far as the point (a lever).
+  if (!(share > 0) || free_weight < MIN_FREE_WEIGHT) return false;
   // The side: the closest point's at the start, from the centre then.
   const auto before = ccd::closest_point_triangle<Scalar>(at_start.point, start[std::size_t(tri[0])],
                                                           start[std::size_t(tri[1])], start[std::size_t(tri[2])]);
