@@ -82,8 +82,9 @@ inline std::vector<std::pair<int, std::filesystem::path>> run_folder_frames(cons
   return frames;
 }
 
-/// The last frame stats.csv has a whole row for (its first cell), or -1 without the file or a
-/// row: a run writes each frame's mesh before its row, so the meshes must reach it.
+/// The last frame stats.csv has a row for (a frame number and the comma after it), or -1
+/// without the file or a row: a run writes each frame's mesh before its row, so the meshes
+/// must reach it.
 inline int last_frame_in_stats(const std::filesystem::path& folder) {
   const std::filesystem::path stats = folder / "stats.csv";
   std::error_code error;
@@ -141,15 +142,17 @@ inline std::optional<RunFolder> open_run_folder(const std::filesystem::path& fol
     if (frame == expected) ++expected;
   }
   // Frames lost from the end: stats.csv has their rows.
-  for (int frame = run.frames.back().first + 1; frame <= last_in_stats && missing.size() <= 5; ++frame)
-    missing.push_back(frame);
+  for (long frame = long(run.frames.back().first) + 1; frame <= last_in_stats && missing.size() <= 5; ++frame)
+    missing.push_back(int(frame));
   if (!missing.empty()) {
     std::string list;
     for (std::size_t i = 0; i < std::min<std::size_t>(missing.size(), 5); ++i)
       list += (i ? ", " : "") + std::to_string(missing[i]);
     std::cerr << "drape " << command << ": " << folder.string() << ": frame" << (missing.size() > 1 ? "s " : " ") << list
               << (missing.size() > 5 ? " and more" : "") << " missing (the folder has frames up to "
-              << run.frames.back().first << ", stats.csv rows up to " << last_in_stats << ")\n";
+              << run.frames.back().first;
+    if (last_in_stats >= 0) std::cerr << ", stats.csv rows up to " << last_in_stats;
+    std::cerr << ")\n";
     return std::nullopt;
   }
   return run;

@@ -188,8 +188,8 @@ struct CollisionPipeline::Impl {
 
   // The self-collision response must not push cloth into a sphere or plane (the integrator
   // answered those before): a free vertex whose end position lies within ANALYTIC_KEEP_OUT of
-  // the thickness of one is moved back out to that depth (drape::keep_out_of_analytic_obstacles,
-  // without friction). Runs before every re-detection, so what the final detection sees is both
+  // the thickness of one is moved back out to that depth, and a face a sphere comes between the
+  // corners of to its share of it (drape::keep_out_of_analytic_obstacles, without friction). Runs before every re-detection, so what the final detection sees is both
   // above the shapes and, when it finds nothing, intersection-free.
   void keep_out_of_analytic_obstacles(Scalar t_next, Scalar h, std::vector<Vec3>& motion) const;
 

@@ -296,6 +296,9 @@ void add_sphere_face_contacts(const Model& m, const PosedShape& shape, Scalar t,
     if (covered) continue;
     contact.surface_velocity = body_velocity(shape.obstacle->spec.motion, shape.point + shape.radius * contact.normal, t);
     contact.target = contact.normal.dot(contact.surface_velocity);
+    // Not `analytic`: like a mesh obstacle's contact with a cloth triangle, it is a penalty of the
+    // projective solver (not one of its per-vertex constraints), and the response's spread does
+    // not hold it again (the response answers such faces again after the spread).
     contacts.push_back(contact);
   }
 }

@@ -72,6 +72,10 @@ constexpr int FACE_SWEEPS = 8;
 // point's weight: at most twice the point's change for one free corner.
 constexpr Scalar MIN_FREE_WEIGHT = 0.5;
 
+// A face within this fraction of the depth short of it is not pushed (what a push leaves by
+// rounding; pushed again, a face resting on a sphere counted twice a step and ran every sweep).
+constexpr Scalar FACE_PUSH_TOLERANCE = 1e-6;
+
 // The projection's friction on one cloth point's motion and velocity (the point in contact:
 // a vertex, or a triangle's closest point to a sphere, by its weights), changed in place: from
 // the normal change the projection made to the motion (pushed, m/s), Coulomb friction on the
@@ -133,10 +137,13 @@ bool push_face_out(const Model& model, const PosedShape& at_start, const PosedSh
   Vec3 offset = closest.point - shape.point;
   const Scalar distance = offset.norm();
   Vec3 normal = distance > 0 ? Vec3(offset / distance) : Vec3(side.normalized());
+  if (!(normal.squaredNorm() > 0.5)) return false;  // the centre on the triangle at both ends: no side
   if (normal.dot(side) < 0) normal = -normal;
   const Scalar along = offset.dot(normal);  // negative where the centre crossed the triangle
-  const Scalar push = (reach - along) / h;    // the closest point's normal motion change, m/s
-  if (!(push > 0) || !std::isfinite(push)) return false;
+  // What the last push left within rounding of the depth is not pushed again.
+  if (!(reach - along > FACE_PUSH_TOLERANCE * depth)) return false;
+  const Scalar push = (reach - along) / h;  // the closest point's normal motion change, m/s
+  if (!std::isfinite(push)) return false;
   SurfaceContact c;
   c.signed_distance = along - shape.radius;
   c.normal = normal;
@@ -185,12 +192,17 @@ int keep_out_of_analytic_obstacles(const Model& model, const std::vector<Vec3>& 
     // deepest point below it is a corner). Sweeps, since neighbouring faces share corners.
     if (!shape.sphere) continue;
     const PosedShape at_start = pose_shape(obstacle, t_next - h);
+    std::vector<char> pushed(model.triangles.size(), 0);  // each face counted once
     for (int sweep = 0; sweep < FACE_SWEEPS; ++sweep) {
-      int moved = 0;
-      for (const Triangle& tri : model.triangles)
-        moved += push_face_out(model, at_start, shape, t_next, start, h, FACE_DEPTH_FRACTION * depth, tri, motion, velocities);
-      contacts += moved;
-      if (moved == 0) break;
+      bool moved = false;
+      for (std::size_t f = 0; f < model.triangles.size(); ++f)
+        if (push_face_out(model, at_start, shape, t_next, start, h, FACE_DEPTH_FRACTION * depth, model.triangles[f], motion,
+                          velocities)) {
+          moved = true;
+          contacts += !pushed[f];
+          pushed[f] = 1;
+        }
+      if (!moved) break;
     }
   }
   return contacts;

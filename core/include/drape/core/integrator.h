@@ -40,7 +40,7 @@ struct StepReport {
   int solver_iterations = 0;
   bool solver_converged = true;
   double solve_ms = 0;        ///< assembly excluded
-  int obstacle_contacts = 0;  ///< vertices projected out of analytic obstacles
+  int obstacle_contacts = 0;  ///< vertices projected out of spheres and planes, and faces pushed out of spheres
   CollisionCounters collisions;  ///< the collision pipeline's work (zero when not needed)
   /// J: energy the scene's sources may have put into the cloth this step, each source's work
   /// counted when positive: the handles (the force that keeps each pinned vertex on its path,

@@ -28,7 +28,7 @@ struct FrameStats {
   Scalar potential_energy = 0;
   Scalar max_stretch = 1;
   std::optional<Scalar> min_distance_obstacle;  ///< empty when the scene has no obstacle
-  int obstacle_contacts = 0;   ///< vertex projections out of analytic obstacles, summed
+  int obstacle_contacts = 0;   ///< vertices projected out of spheres and planes and faces pushed out of spheres, summed
   int solver_warnings = 0;     ///< cg solves that stopped at the iteration cap
   CollisionCounters collisions;  ///< the collision pipeline, summed over the frame's steps
   std::optional<int> penetrations;  ///< intersecting triangle pairs by the independent check, when enabled
