@@ -6,7 +6,7 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 BUILD_DIR=${BUILD_DIR:-build}
 DRAPE="$BUILD_DIR/app/drape"
-declare -A FRAMES=([drape_sphere]=12 [hanging]=15 [flag]=10 [cloth_fold]=10 [mesh_obstacle]=8 [fast_drop]=3 [pile]=2 [tablecloth]=4 [cusick_drape]=2)
+declare -A FRAMES=([drape_sphere]=12 [hanging]=15 [flag]=10 [cloth_fold]=10 [mesh_obstacle]=8 [fast_drop]=3 [pile]=2 [tablecloth]=4 [cusick_drape]=2 [cantilever]=20)
 mkdir -p tests/golden
 for scene in scenes/*.json; do
   name=$(basename "$scene" .json)

@@ -1,5 +1,7 @@
 #include "drape/core/scene.h"
 
+#include "drape/core/fabrics.h"
+
 #include "drape/ccd/input_file.h"
 
 #include <cmath>
@@ -219,22 +221,38 @@ ClothSpec read_cloth(const Node& n) {
   if (n.has("render")) c.render_json = render_section(n.at("render"));
   if (n.has("material")) {
     const Node m = n.at("material");
-    m.allow({"density", "mass_per_area", "stretch", "tensile_stiffness", "shear", "shear_stiffness", "bend",
+    m.allow({"preset", "density", "mass_per_area", "stretch", "tensile_stiffness", "shear", "shear_stiffness", "bend",
              "bending_rigidity", "damping", "air_damping", "strain_limit"});
+    // A preset is a measured fabric in the fabric's keys (fabrics.h); keys beside it override
+    // its numbers. A mesh's shear follows from its tensile stiffness, so a preset sets none there.
+    const MeasuredFabric* preset = nullptr;
+    if (m.has("preset")) {
+      std::string names;
+      for (const MeasuredFabric& f : measured_fabrics()) names += (names.empty() ? "" : ", ") + f.name;
+      const std::string name = m.at("preset").string();
+      preset = find_measured_fabric(name);
+      if (!preset) m.at("preset").fail("expected a fabric preset: one of " + names + " (docs/materials.md)");
+      const FabricPreset p = fabric_preset(*preset);
+      c.material.density = p.density;
+      c.material.tensile_stiffness = p.tensile_stiffness;
+      if (c.grid) c.material.shear_stiffness = p.shear_stiffness;
+      c.material.bending_rigidity = p.bending_rigidity;
+    }
     // A material is the springs' constants or the fabric's measurements, not a mix: a spring
     // key beside the fabric's stiffnesses would be silently ignored or (bend springs) stiffen
     // the sheet by an amount that depends on the resolution.
     if (m.has("density") && m.has("mass_per_area"))
       m.at("mass_per_area").fail("expected 'density' (kg/m^2) or 'mass_per_area' (g/m^2), not both");
-    const bool fabric = m.has("tensile_stiffness") || m.has("shear_stiffness");
+    const bool fabric = preset || m.has("tensile_stiffness") || m.has("shear_stiffness");
     for (const char* spring : {"stretch", "shear", "bend"})
       if (fabric && m.has(spring))
-        m.at(spring).fail(std::string("expected no '") + spring + "' beside 'tensile_stiffness' and 'shear_stiffness' "
-                          "(N/m): the fabric's keys set the springs, and its bending is 'bending_rigidity' (N m)");
+        m.at(spring).fail(std::string("expected no '") + spring + "' beside " +
+                          (preset ? "a 'preset'" : "'tensile_stiffness' and 'shear_stiffness' (N/m)") +
+                          ": the fabric's keys set the springs, and its bending is 'bending_rigidity' (N m)");
     if (!c.grid && m.has("shear_stiffness"))
       m.at("shear_stiffness").fail("a mesh cloth's springs lie on its edges: its shear stiffness follows from "
                                    "'tensile_stiffness' (3/8 of it for equilateral triangles); expected that key alone");
-    if (c.grid && fabric && !(m.has("tensile_stiffness") && m.has("shear_stiffness")))
+    if (c.grid && fabric && !preset && !(m.has("tensile_stiffness") && m.has("shear_stiffness")))
       m.at(m.has("tensile_stiffness") ? "tensile_stiffness" : "shear_stiffness")
           .fail("expected 'tensile_stiffness' and 'shear_stiffness' together (N/m): a grid's springs need both");
     if (m.has("bend") && m.has("bending_rigidity"))

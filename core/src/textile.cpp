@@ -2,6 +2,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
+#include <string>
 #include <stdexcept>
 
 namespace drape {
@@ -90,6 +92,108 @@ CusickResult measure_cusick(const std::vector<Vec3>& positions, const std::vecto
     smooth[std::size_t(i)] /= 2 * OUTLINE_SMOOTHING + 1;
   }
   r.nodes = count_peaks(smooth, NODE_PROMINENCE * setup.fabric_radius);
+  return r;
+}
+
+// The heavy elastica: theta'' = -q (L - s) cos theta with theta(0) = 0 (clamped level) and
+// theta'(L) = 0 (a free end carries no moment), theta the strip's angle below the level at
+// arc length s and q = w g / B. Central differences on ELASTICA_INTERVALS intervals, solved by
+// Newton's method, the load raised from zero in ELASTICA_STAGES steps (shooting on theta'(0)
+// or on the tip's angle finds spurious roots once the strip hangs nearly straight down); the
+// drop is the integral of sin theta.
+Scalar heavy_elastica_drop(Scalar length, Scalar load_over_rigidity) {
+  if (!(std::isfinite(length) && length > 0 && std::isfinite(load_over_rigidity) && load_over_rigidity >= 0))
+    throw std::invalid_argument("expected a finite positive length and a finite load over rigidity of 0 or more");
+  constexpr int ELASTICA_STAGES = 100, NEWTON_ITERATIONS = 50;
+  constexpr Scalar NEWTON_STEP = 1e-13;  // rad: the largest change that ends the iteration
+  const int n = ELASTICA_INTERVALS;      // theta_0 = 0 is fixed, theta_1 .. theta_n unknown
+  const Scalar h = length / n;
+  std::vector<Scalar> theta(n + 1, 0.0), lower(n + 1), diagonal(n + 1), upper(n + 1), residual(n + 1);
+  for (int stage = 1; stage <= ELASTICA_STAGES; ++stage) {
+    const Scalar q = load_over_rigidity * stage / ELASTICA_STAGES;
+    for (int iteration = 0; iteration < NEWTON_ITERATIONS; ++iteration) {
+      // Row i: (theta_{i-1} - 2 theta_i + theta_{i+1}) / h^2 + q (L - s_i) cos theta_i, with
+      // theta_{n+1} = theta_{n-1} at the free end; its Jacobian is tridiagonal.
+      for (int i = 1; i <= n; ++i) {
+        const std::size_t k = std::size_t(i);
+        const Scalar next = i < n ? theta[k + 1] : theta[std::size_t(n - 1)];
+        const Scalar load = q * (length - i * h);
+        residual[k] = (theta[k - 1] - 2 * theta[k] + next) / (h * h) + load * std::cos(theta[k]);
+        lower[k] = i < n ? 1 / (h * h) : 2 / (h * h);
+        upper[k] = 1 / (h * h);
+        diagonal[k] = -2 / (h * h) - load * std::sin(theta[k]);
+      }
+      // Thomas's algorithm on J delta = -residual (row 1 has no lower term: theta_0 is fixed).
+      for (std::size_t k = 2; k <= std::size_t(n); ++k) {
+        const Scalar factor = lower[k] / diagonal[k - 1];
+        diagonal[k] -= factor * upper[k - 1];
+        residual[k] -= factor * residual[k - 1];
+      }
+      Scalar largest = 0, delta = 0;
+      for (std::size_t k = std::size_t(n); k >= 1; --k) {
+        delta = (-residual[k] - (k < std::size_t(n) ? upper[k] * delta : 0)) / diagonal[k];
+        theta[k] += delta;
+        largest = std::max(largest, std::abs(delta));
+      }
+      if (largest < NEWTON_STEP) break;
+    }
+  }
+  Scalar drop = 0;
+  for (std::size_t k = 0; k < std::size_t(n); ++k) drop += 0.5 * h * (std::sin(theta[k]) + std::sin(theta[k + 1]));
+  return drop;
+}
+
+Scalar elastica_bending_length(Scalar length, Scalar drop) {
+  if (!(std::isfinite(length) && length > 0 && std::isfinite(drop) && drop > 0))
+    throw std::invalid_argument("expected a finite positive length and a tip that dropped");
+  const auto drop_for = [&](Scalar c) { return heavy_elastica_drop(length, 1 / (c * c * c)); };
+  // The shortest bending length told apart, and the longest: a heavy elastica drops less than
+  // the linear beam's L^4 / (8 c^3), so the beam's c for this drop drops at most this much.
+  Scalar lo = length / MAX_OVERHANG_OVER_BENDING_LENGTH, hi = std::cbrt(std::pow(length, 4) / (8 * drop));
+  if (!(drop < drop_for(lo)))
+    throw std::invalid_argument("the tip hangs too nearly straight down to tell a bending length (under the overhang over " +
+                                std::to_string(int(MAX_OVERHANG_OVER_BENDING_LENGTH)) + ")");
+  if (hi <= lo) return lo;
+  while (hi / lo - 1 > BENDING_LENGTH_TOLERANCE) {
+    const Scalar mid = std::sqrt(lo * hi);
+    (drop_for(mid) > drop ? lo : hi) = mid;  // a longer bending length drops less
+  }
+  return std::sqrt(lo * hi);
+}
+
+CantileverResult measure_cantilever(const std::vector<Vec3>& initial, const std::vector<Vec3>& positions,
+                                    const std::vector<bool>& held, const Vec3& down) {
+  if (initial.size() != positions.size() || held.size() != positions.size())
+    throw std::invalid_argument("expected the start, the frame and the held flags for the same vertices");
+  if (!(down.norm() > 0)) throw std::invalid_argument("expected gravity of nonzero length");
+  const Vec3 g = down.normalized();
+  Vec3 clamp = Vec3::Zero(), free = Vec3::Zero();
+  int held_count = 0, free_count = 0;
+  for (std::size_t v = 0; v < initial.size(); ++v)
+    if (held[v]) clamp += initial[v], ++held_count;
+    else free += initial[v], ++free_count;
+  if (held_count == 0) throw std::invalid_argument("expected a clamp: vertices held by a handle");
+  if (free_count == 0) throw std::invalid_argument("expected free vertices beyond the clamp");
+  Vec3 along = free / free_count - clamp / held_count;
+  along -= along.dot(g) * g;
+  if (!(along.norm() > 0)) throw std::invalid_argument("expected the free vertices beside the clamp, across gravity");
+  along.normalize();
+  // Distances along the strip: the clamp's edge, the first free column, the tip.
+  Scalar edge = -std::numeric_limits<Scalar>::infinity(), tip = edge;
+  for (std::size_t v = 0; v < initial.size(); ++v)
+    if (held[v]) edge = std::max(edge, initial[v].dot(along));
+    else tip = std::max(tip, initial[v].dot(along));
+  CantileverResult r;
+  r.overhang = tip - edge;
+  if (!(r.overhang > 0)) throw std::invalid_argument("expected free vertices beyond the clamp's edge");
+  Scalar first = r.overhang;
+  for (std::size_t v = 0; v < initial.size(); ++v)
+    if (!held[v] && initial[v].dot(along) > edge) first = std::min(first, initial[v].dot(along) - edge);
+  r.clamp_offset = first / 2;
+  const Scalar tip_band = TIP_BAND * r.overhang;  // the tip: free vertices this close to the farthest
+  for (std::size_t v = 0; v < initial.size(); ++v)
+    if (!held[v] && initial[v].dot(along) >= tip - tip_band) r.drop += (positions[v] - initial[v]).dot(g), ++r.tip_vertices;
+  r.drop /= r.tip_vertices;
   return r;
 }
 

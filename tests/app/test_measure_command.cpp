@@ -1,6 +1,7 @@
-// drape measure end to end: the Cusick measurements of a run's frame, and bad input.
+// drape measure end to end: the Cusick and cantilever measurements of a run's frame, and bad input.
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <fstream>
 
 #include "drape_process.h"
@@ -34,4 +35,39 @@ TEST(MeasureCommand, TheCusickCoefficientOfAFlatDiscIsOne) {
   EXPECT_NE(inverted.output.find("expected radii with 0 < support radius < fabric radius"), std::string::npos) << inverted.output;
   EXPECT_EQ(run_drape("measure drop " + (dir / "out").string()).status, 2);
   EXPECT_EQ(run_drape("measure cusick " + (dir / "nothing").string()).status, 2);
+}
+
+// The shipped cantilever scene in full: the strip settles where the heavy elastica puts it for
+// the material's bending rigidity (within the 3 % of issue 20's target), and the bending length
+// read back from its drop is the material's.
+TEST(MeasureCommand, TheCantileverSceneDropsAsTheHeavyElastica) {
+  const fs::path out = fresh_temp_path("measure", "cantilever");
+  ASSERT_EQ(run_drape("run " DRAPE_SOURCE_DIR "/scenes/cantilever.json --quiet --out " + out.string()).status, 0);
+  const Outcome measured = run_drape("measure cantilever " + out.string() + " --json");
+  ASSERT_EQ(measured.status, 0) << measured.output;
+  const auto number = [&](const std::string& key) {
+    const auto at = measured.output.find("\"" + key + "\": ");
+    EXPECT_NE(at, std::string::npos) << key << ": " << measured.output;
+    return at == std::string::npos ? std::nan("") : std::stod(measured.output.substr(at + key.size() + 4));
+  };
+  EXPECT_NEAR(number("drop_over_elastica"), 1, 0.03) << measured.output;
+  EXPECT_NEAR(number("bending_length_m") / number("material_bending_length_m"), 1, 0.01) << measured.output;
+  EXPECT_GT(number("tip_drop_m"), 0.005) << measured.output;  // it did bend
+  // In words, and the start's strip: no drop, which tells no bending length.
+  const Outcome words = run_drape("measure cantilever " + out.string());
+  EXPECT_EQ(words.status, 0) << words.output;
+  EXPECT_NE(words.output.find("measured / elastica"), std::string::npos) << words.output;
+  const Outcome flat = run_drape("measure cantilever " + out.string() + " --frame 0");
+  EXPECT_EQ(flat.status, 2);
+  EXPECT_NE(flat.output.find("frame 0: expected a finite positive length and a tip that dropped"), std::string::npos) << flat.output;
+}
+
+TEST(MeasureCommand, ACantileverWithoutAClampIsRefused) {
+  const fs::path dir = fresh_temp_path("measure", "unclamped");
+  fs::create_directories(dir);
+  std::ofstream(dir / "strip.json") << R"({"frames": 1, "cloths": [{"grid": {"size": [0.1, 0.02], "resolution": [10, 2]}}]})";
+  ASSERT_EQ(run_drape("run " + (dir / "strip.json").string() + " --quiet --out " + (dir / "out").string()).status, 0);
+  const Outcome r = run_drape("measure cantilever " + (dir / "out").string());
+  EXPECT_EQ(r.status, 2);
+  EXPECT_NE(r.output.find("expected a clamp: vertices held by a handle"), std::string::npos) << r.output;
 }

@@ -1,7 +1,7 @@
 // The hinge bending model (Model::hinges, material `bending_rigidity`): its calibration on a
 // cylinder and across a grid's axes, its indifference to rigid motions and in-plane affine
 // maps, its Jacobians, the two solvers' agreement on it, and the cantilever test (Peirce; ASTM
-// D1388) against the heavy elastica solved numerically here (and that solver checked).
+// D1388) against the heavy elastica solved numerically (core/textile.h; checked in test_textile.cpp).
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -9,6 +9,7 @@
 #include <sstream>
 
 #include "drape/core/integrator.h"
+#include "drape/core/textile.h"
 
 using namespace drape;
 
@@ -33,61 +34,6 @@ Scalar bending_energy(const Model& model, const std::vector<Vec3>& x) {
   return e;
 }
 
-// The tip deflection of a heavy elastica (Euler's inextensible strip, clamped level at s = 0,
-// free at s = L, loaded by its weight w per unit area, rigidity B per unit width): theta'' =
-// -(w / B) (L - s) cos theta, theta(0) = 0, theta'(L) = 0, as central differences on 4000
-// intervals solved by Newton's method, the load raised in 100 steps from zero (shooting on
-// theta'(0) or on the tip's angle finds spurious roots once the strip hangs nearly straight
-// down); the deflection is the integral of sin theta.
-Scalar elastica_deflection(Scalar length, Scalar load_over_rigidity) {
-  const int n = 4000;  // intervals; theta_0 = 0 is fixed, theta_1 .. theta_n unknown
-  const Scalar h = length / n;
-  std::vector<Scalar> theta(n + 1, 0.0), lower(n + 1), diagonal(n + 1), upper(n + 1), residual(n + 1);
-  for (int stage = 1; stage <= 100; ++stage) {
-    const Scalar q = load_over_rigidity * stage / 100;
-    for (int iteration = 0; iteration < 50; ++iteration) {
-      // Row i: (theta_{i-1} - 2 theta_i + theta_{i+1}) / h^2 + q (L - s_i) cos theta_i, with
-      // theta_{n+1} = theta_{n-1} at the free end (theta' = 0); its Jacobian is tridiagonal.
-      for (int i = 1; i <= n; ++i) {
-        const Scalar next = i < n ? theta[std::size_t(i + 1)] : theta[std::size_t(n - 1)];
-        const Scalar load = q * (length - i * h);
-        residual[std::size_t(i)] = (theta[std::size_t(i - 1)] - 2 * theta[std::size_t(i)] + next) / (h * h) +
-                                   load * std::cos(theta[std::size_t(i)]);
-        lower[std::size_t(i)] = i < n ? 1 / (h * h) : 2 / (h * h);
-        upper[std::size_t(i)] = 1 / (h * h);
-        diagonal[std::size_t(i)] = -2 / (h * h) - load * std::sin(theta[std::size_t(i)]);
-      }
-      // Thomas's algorithm on J delta = -residual (theta_0 fixed: row 1 has no lower term).
-      for (int i = 2; i <= n; ++i) {
-        const Scalar factor = lower[std::size_t(i)] / diagonal[std::size_t(i - 1)];
-        diagonal[std::size_t(i)] -= factor * upper[std::size_t(i - 1)];
-        residual[std::size_t(i)] -= factor * residual[std::size_t(i - 1)];
-      }
-      Scalar largest = 0, delta = 0;
-      for (int i = n; i >= 1; --i) {
-        delta = (-residual[std::size_t(i)] - (i < n ? upper[std::size_t(i)] * delta : 0)) / diagonal[std::size_t(i)];
-        theta[std::size_t(i)] += delta;
-        largest = std::max(largest, std::abs(delta));
-      }
-      if (largest < 1e-13) break;
-    }
-  }
-  Scalar drop = 0;
-  for (int i = 0; i < n; ++i) drop += 0.5 * h * (std::sin(theta[std::size_t(i)]) + std::sin(theta[std::size_t(i + 1)]));
-  return drop;
-}
-
-TEST(Bending, TheElasticaSolverMeetsTheBeamAndItself) {
-  // The reference itself: a light load is the linear beam's w L^4 / (8 B); a strip of bending
-  // length c overhanging 2c drops 0.6406 of its length at any scale (a property of the
-  // equation, found here by the solver at two scales).
-  EXPECT_NEAR(elastica_deflection(1, 0.01) / (0.01 / 8), 1, 1e-4);
-  const Scalar small = elastica_deflection(0.02, 1 / std::pow(0.01, 3)) / 0.02;
-  EXPECT_NEAR(elastica_deflection(0.12, 1 / std::pow(0.06, 3)) / 0.12, small, 1e-6);
-  EXPECT_NEAR(small, 0.6406, 1e-3);  // shooting on theta'(0), where it finds the root, gives 0.64063
-  // Six bending lengths out it hangs nearly straight down.
-  EXPECT_GT(elastica_deflection(0.06, 1 / std::pow(0.01, 3)) / 0.06, 0.9);
-}
 
 // The cantilever test on a strip overhanging its clamp by `overhang` with bending length c
 // ((B / w)^(1/3), w its weight per area): the mean tip drop after it settles, with `quads`
@@ -210,7 +156,7 @@ TEST(Bending, ACantileverDropsAsTheHeavyElastica) {
   for (const Scalar c : {0.01, 0.03, 0.06}) {
     const Scalar overhang = 0.06;
     for (int quads : {8, 16, 32}) {
-      const Scalar expected = elastica_deflection(overhang + 0.5 * overhang / quads, 1 / std::pow(c, 3));
+      const Scalar expected = heavy_elastica_drop(overhang + 0.5 * overhang / quads, 1 / std::pow(c, 3));
       const Scalar drop = cantilever_drop(overhang, c, quads, R"({"type": "cholmod"})");
       EXPECT_NEAR(drop / expected, 1, 0.03) << "c " << c << ", " << quads << " quads: " << drop << " m, elastica " << expected;
     }

@@ -1,6 +1,8 @@
-// The Cusick drape test's measurements on shapes whose answers are known in closed form.
+// The textile laboratory's measurements on shapes whose answers are known in closed form: the
+// Cusick drape test's, and the cantilever test's with the heavy elastica it compares against.
 #include <gtest/gtest.h>
 
+#include <Eigen/Geometry>
 #include <cmath>
 #include <functional>
 #include <stdexcept>
@@ -92,4 +94,66 @@ TEST(Cusick, ADegenerateSetupIsRefused) {
   CusickSetup nowhere;
   nowhere.down = Vec3::Zero();
   EXPECT_THROW(measure_cusick(m.x, m.t, nowhere), std::invalid_argument);
+}
+
+TEST(Cantilever, TheElasticaSolverMeetsTheBeamAndItself) {
+  // The reference itself: a light load is the linear beam's w L^4 / (8 B); a strip of bending
+  // length c overhanging 2c drops 0.6406 of its length at any scale (a property of the
+  // equation, found here by the solver at two scales).
+  EXPECT_NEAR(heavy_elastica_drop(1, 0.01) / (0.01 / 8), 1, 1e-4);
+  const Scalar small = heavy_elastica_drop(0.02, 1 / std::pow(0.01, 3)) / 0.02;
+  EXPECT_NEAR(heavy_elastica_drop(0.12, 1 / std::pow(0.06, 3)) / 0.12, small, 1e-6);
+  EXPECT_NEAR(small, 0.6406, 1e-3);  // shooting on theta'(0), where it finds the root, gives 0.64063
+  // Six bending lengths out it hangs nearly straight down.
+  EXPECT_GT(heavy_elastica_drop(0.06, 1 / std::pow(0.01, 3)) / 0.06, 0.9);
+}
+
+
+TEST(Cantilever, TheBendingLengthOfADropIsTheElasticasInverse) {
+  for (const Scalar c : {0.005, 0.01, 0.03, 0.06, 0.5}) {
+    const Scalar length = 0.06, drop = heavy_elastica_drop(length, 1 / (c * c * c));
+    EXPECT_NEAR(elastica_bending_length(length, drop) / c, 1, 1e-5) << "c " << c;
+  }
+  EXPECT_THROW(elastica_bending_length(0.06, 0), std::invalid_argument);
+  EXPECT_THROW(elastica_bending_length(0.06, -1e-3), std::invalid_argument);
+  EXPECT_THROW(elastica_bending_length(0.06, 0.06), std::invalid_argument);  // straight down: any short c
+  EXPECT_THROW(elastica_bending_length(0, 0.01), std::invalid_argument);
+  EXPECT_THROW(heavy_elastica_drop(0.06, std::nan("")), std::invalid_argument);
+}
+
+TEST(Cantilever, AStripTurnedAboutItsClampsEdgeDropsByTheSine) {
+  // A strip of 4 x 3 held columns behind x = 0 and 8 free ones of 1 cm beyond it, its free part
+  // turned down by 30 degrees about the clamp's edge; the whole set-up then turned and moved
+  // anywhere, gravity with it.
+  const Scalar a = 0.01, angle = M_PI / 6;
+  const Eigen::Matrix3d turn = Eigen::AngleAxisd(0.7, Vec3(1, 2, 3).normalized()).toRotationMatrix();
+  const Vec3 shift(3, -2, 5);
+  std::vector<Vec3> initial, bent;
+  std::vector<bool> held;
+  for (int i = -3; i <= 8; ++i)
+    for (int j = 0; j < 4; ++j) {
+      const Scalar x = i * a, y = j * 0.005;
+      initial.push_back(turn * Vec3(x, y, 0) + shift);
+      bent.push_back(turn * (x > 0 ? Vec3(x * std::cos(angle), y, -x * std::sin(angle)) : Vec3(x, y, 0)) + shift);
+      held.push_back(x <= 0);
+    }
+  const CantileverResult r = measure_cantilever(initial, bent, held, turn * Vec3(0, 0, -9.81));
+  EXPECT_NEAR(r.overhang, 8 * a, 1e-12);
+  EXPECT_NEAR(r.clamp_offset, a / 2, 1e-12);
+  EXPECT_EQ(r.tip_vertices, 4);
+  EXPECT_NEAR(r.drop, 8 * a * std::sin(angle), 1e-12);
+  EXPECT_NEAR(r.clamped_length(), 8.5 * a, 1e-12);
+}
+
+TEST(Cantilever, AStripWithoutAClampOrAnOverhangIsRefused) {
+  const std::vector<Vec3> x = {Vec3(0, 0, 0), Vec3(0.01, 0, 0), Vec3(0.02, 0, 0)};
+  const Vec3 down(0, 0, -1);
+  EXPECT_THROW(measure_cantilever(x, x, {false, false, false}, down), std::invalid_argument);
+  EXPECT_THROW(measure_cantilever(x, x, {true, true, true}, down), std::invalid_argument);
+  EXPECT_THROW(measure_cantilever(x, x, {true, false}, down), std::invalid_argument);
+  EXPECT_THROW(measure_cantilever(x, x, {true, false, false}, Vec3::Zero()), std::invalid_argument);
+  // Free vertices straight below the clamp: no overhang across gravity.
+  const std::vector<Vec3> hanging = {Vec3(0, 0, 0), Vec3(0, 0, -0.01)};
+  EXPECT_THROW(measure_cantilever(hanging, hanging, {true, false}, down), std::invalid_argument);
+  EXPECT_NO_THROW(measure_cantilever(x, x, {true, false, false}, down));
 }

@@ -1,9 +1,10 @@
 #pragma once
 /// \file
-/// The textile laboratory's measurements on a run (the Cusick drape test).
+/// The textile laboratory's measurements on a run (the Cusick drape test, the cantilever test).
 ///
 /// Measurements of the textile laboratory on a simulated cloth: the Cusick drape test's drape
-/// coefficient and node count (BS 5058, ISO 9073-9).
+/// coefficient and node count (BS 5058, ISO 9073-9), and the cantilever bending test's bending
+/// length (Peirce 1930; ASTM D1388) against the heavy elastica.
 
 #include <vector>
 
@@ -45,5 +46,51 @@ inline constexpr int OUTLINE_SMOOTHING = 10;
 /// Measures the cloth (positions, triangles) against the set-up. Throws std::invalid_argument
 /// when the set-up is degenerate (radii not 0 < support < fabric, a zero direction).
 CusickResult measure_cusick(const std::vector<Vec3>& positions, const std::vector<Triangle>& triangles, const CusickSetup& setup);
+
+/// The tip's drop (m) of a heavy elastica: Euler's inextensible strip of length `length` (m),
+/// clamped level at one end, free at the other, bending under its own weight, with
+/// load_over_rigidity = w g / B (1/m^3; weight per unit area over bending rigidity per unit
+/// width, 1 / c^3 for the bending length c). Solved numerically on ELASTICA_INTERVALS
+/// intervals (textile.cpp says how). Throws std::invalid_argument unless both are finite and
+/// positive (a load of 0 drops nothing: 0 is accepted).
+Scalar heavy_elastica_drop(Scalar length, Scalar load_over_rigidity);
+
+/// Central-difference intervals of the elastica's solution: its drop to about 1e-7 of the length.
+inline constexpr int ELASTICA_INTERVALS = 4000;
+
+/// The bending length c (m) of a heavy elastica of this length whose tip drops by `drop`: the
+/// inverse of heavy_elastica_drop, by bisection on log c to a relative BENDING_LENGTH_TOLERANCE.
+/// Throws std::invalid_argument unless 0 < drop < the drop of a strip of bending length
+/// length / MAX_OVERHANG_OVER_BENDING_LENGTH (all but hanging straight down).
+Scalar elastica_bending_length(Scalar length, Scalar drop);
+
+inline constexpr Scalar BENDING_LENGTH_TOLERANCE = 1e-6;
+/// Overhangs longer than this many bending lengths hang so nearly straight down (drop 0.9934 of
+/// the overhang at 20) that the drop no longer tells the bending length; the solver's
+/// continuation also fails beyond about 25.
+inline constexpr Scalar MAX_OVERHANG_OVER_BENDING_LENGTH = 20;
+
+/// What the cantilever test reads from a strip clamped at one end (its held vertices) and free
+/// at the other, at rest under gravity.
+struct CantileverResult {
+  Scalar overhang = 0;        ///< m, at the start: from the clamp's edge (the held vertex farthest along the strip) to the tip
+  Scalar clamp_offset = 0;    ///< m: half the first free quad, by which the clamped length exceeds the overhang (below)
+  Scalar drop = 0;            ///< m: the tip's (the farthest free vertices') mean drop along gravity since the start
+  int tip_vertices = 0;
+  /// The strip's length as a heavy elastica clamped level: overhang + clamp_offset. A hinge on
+  /// the clamp's edge bends over its whole dual cell, half of which lies behind the edge, so a
+  /// discrete strip bends from half a quad behind its last held vertex (docs/materials.md).
+  Scalar clamped_length() const { return overhang + clamp_offset; }
+};
+
+/// The tip: free vertices whose start lies within this fraction of the overhang of the farthest.
+inline constexpr Scalar TIP_BAND = 1e-6;
+
+/// Measures a cantilever: initial and current positions, which vertices are held (the clamp),
+/// and gravity's direction. The strip runs from the held vertices' centroid towards the free
+/// ones' across gravity. Throws std::invalid_argument when there is no clamp, no free vertex,
+/// or no overhang across gravity.
+CantileverResult measure_cantilever(const std::vector<Vec3>& initial, const std::vector<Vec3>& positions,
+                                    const std::vector<bool>& held, const Vec3& down);
 
 }  // namespace drape

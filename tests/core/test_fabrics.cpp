@@ -1,0 +1,133 @@
+// The fabric presets (fabrics.h): the measured hinge constant's conversion to a bending
+// rigidity, one fabric's conversion worked by hand, and the scene's `preset` key.
+#include <gtest/gtest.h>
+
+#include <Eigen/Geometry>
+#include <cmath>
+#include <map>
+
+#include "drape/core/fabrics.h"
+#include "drape/core/model.h"
+
+using namespace drape;
+
+namespace {
+
+Model model_of(const std::string& json) { return build_model(parse_scene(json, "inline.json")); }
+
+// The simulator's hinge energy (fabrics.h: ke l^2 theta^2 / (8 (A0 + A1)), ke = 1) of a patch
+// of equilateral triangles with edges of `edge` m bent onto a cylinder of radius `radius` across
+// the direction at `angle` to the rows, per square metre of its interior edges' share of the
+// sheet (two thirds of a triangle each).
+Scalar hinge_energy_per_area(Scalar angle, Scalar edge, Scalar radius) {
+  const int n = 30;
+  const Scalar row = edge * std::sqrt(3.0) / 2;
+  const auto at = [&](int i, int j) {
+    const Scalar x = i * edge + (j % 2) * edge / 2, y = j * row;
+    const Scalar u = std::cos(angle) * x + std::sin(angle) * y, v = -std::sin(angle) * x + std::cos(angle) * y;
+    return Vec3(radius * std::sin(u / radius), v, radius * (1 - std::cos(u / radius)));
+  };
+  std::vector<std::array<Vec3, 3>> triangles;
+  for (int j = 0; j + 1 < n; ++j)
+    for (int i = 0; i + 1 < n; ++i)
+      if (j % 2 == 0) {
+        triangles.push_back({at(i, j), at(i + 1, j), at(i, j + 1)});
+        triangles.push_back({at(i + 1, j), at(i + 1, j + 1), at(i, j + 1)});
+      } else {
+        triangles.push_back({at(i, j), at(i + 1, j + 1), at(i, j + 1)});
+        triangles.push_back({at(i, j), at(i + 1, j), at(i + 1, j + 1)});
+      }
+  // Interior edges: those two triangles share (matched by their end points' positions).
+  std::map<std::array<Scalar, 6>, std::vector<std::size_t>> edges;
+  for (std::size_t t = 0; t < triangles.size(); ++t)
+    for (int k = 0; k < 3; ++k) {
+      Vec3 a = triangles[t][std::size_t(k)], b = triangles[t][std::size_t((k + 1) % 3)];
+      if (std::lexicographical_compare(b.data(), b.data() + 3, a.data(), a.data() + 3)) std::swap(a, b);
+      edges[{a.x(), a.y(), a.z(), b.x(), b.y(), b.z()}].push_back(t);
+    }
+  Scalar energy = 0;
+  int interior = 0;
+  for (const auto& [key, pair] : edges) {
+    if (pair.size() != 2) continue;
+    Vec3 normal[2];
+    Scalar area = 0;
+    for (int s = 0; s < 2; ++s) {
+      const auto& t = triangles[pair[std::size_t(s)]];
+      const Vec3 cross = (t[1] - t[0]).cross(t[2] - t[0]);
+      area += cross.norm() / 2, normal[s] = cross.normalized();
+    }
+    const Scalar theta = std::acos(std::clamp(normal[0].dot(normal[1]), Scalar(-1), Scalar(1)));
+    const Scalar length = (Vec3(key[0], key[1], key[2]) - Vec3(key[3], key[4], key[5])).norm();
+    energy += length * length * theta * theta / (8 * area), ++interior;
+  }
+  return energy / (interior * std::sqrt(3.0) / 6 * edge * edge);
+}
+
+}  // namespace
+
+TEST(Fabric, TheMeasuredHingeConstantIsFourTimesTheRigidity) {
+  // Bent across every direction, the hinges store B kappa^2 / 2 with B = ke / 4, to the
+  // patch's discretisation (1 cm edges on a 0.5 m cylinder).
+  const Scalar radius = 0.5;
+  for (const Scalar angle : {0.0, 0.3, M_PI / 6, M_PI / 4, M_PI / 2}) {
+    const Scalar rigidity = 2 * hinge_energy_per_area(angle, 0.01, radius) * radius * radius;
+    EXPECT_NEAR(rigidity / HINGE_CONSTANT_TO_RIGIDITY, 1, 0.02) << "angle " << angle;
+  }
+}
+
+TEST(Fabric, TheDenimPresetIsItsMeasurementsConverted) {
+  // Worked by hand from the data file's numbers: C11 = 2 x 205.352005, C12 = 2 x 10.234077,
+  // C22 = 2 x 1013.88629; T_u = C11 - C12^2 / C22 = 410.4974, T_v = C22 - C12^2 / C11 = 2026.7525.
+  const MeasuredFabric* denim = find_measured_fabric("11oz-black-denim");
+  ASSERT_NE(denim, nullptr);
+  const FabricPreset p = fabric_preset(*denim);
+  EXPECT_NEAR(p.density, 0.324, 1e-12);
+  EXPECT_NEAR(p.tensile_stiffness, (410.4974 + 2026.7525) / 2, 1e-3);
+  EXPECT_NEAR(p.shear_stiffness, 53.387184, 1e-9);
+  EXPECT_NEAR(p.bending_rigidity, (64.196457e-6 + 73.384567e-6 + 96.951576e-6) / 12, 1e-15);
+  // A negative coupling is clamped to zero, as the simulator does: then T_u = C11 and T_v = C22.
+  const FabricPreset knit = fabric_preset(*find_measured_fabric("navy-sparkle-sweat"));
+  EXPECT_NEAR(knit.tensile_stiffness, (2 * 12.486332 + 2 * 3.272434) / 2, 1e-9);
+  EXPECT_EQ(find_measured_fabric("silk"), nullptr);
+  for (const MeasuredFabric& f : measured_fabrics()) {
+    const FabricPreset q = fabric_preset(f);
+    EXPECT_GT(q.tensile_stiffness, 0) << f.name;
+    EXPECT_GT(q.shear_stiffness, 0) << f.name;
+    EXPECT_GT(q.bending_rigidity, 0) << f.name;
+  }
+}
+
+TEST(Fabric, APresetSetsTheFabricsKeysAndOthersOverrideIt) {
+  const FabricPreset denim = fabric_preset(*find_measured_fabric("11oz-black-denim"));
+  const Model grid = model_of(R"({"cloths": [{"grid": {}, "material": {"preset": "11oz-black-denim"}}]})");
+  const Material& m = grid.scene.cloths[0].material;
+  EXPECT_EQ(m.density, denim.density);
+  EXPECT_EQ(m.tensile_stiffness, denim.tensile_stiffness);
+  EXPECT_EQ(m.shear_stiffness, denim.shear_stiffness);
+  EXPECT_EQ(m.bending_rigidity, denim.bending_rigidity);
+  EXPECT_EQ(m.bend, 0);
+  EXPECT_FALSE(grid.hinges.empty());
+  const Model changed = model_of(
+      R"({"cloths": [{"grid": {}, "material": {"preset": "11oz-black-denim", "mass_per_area": 300, "strain_limit": 1.1}}]})");
+  EXPECT_NEAR(changed.scene.cloths[0].material.density, 0.3, 1e-12);
+  EXPECT_EQ(changed.scene.cloths[0].material.strain_limit, 1.1);
+  EXPECT_EQ(changed.scene.cloths[0].material.bending_rigidity, denim.bending_rigidity);
+}
+
+TEST(Fabric, AnUnknownPresetOrASpringKeyBesideOneIsRefused) {
+  try {
+    model_of(R"({"cloths": [{"grid": {}, "material": {"preset": "silk"}}]})");
+    ADD_FAILURE() << "no error";
+  } catch (const SceneError& e) {
+    const std::string what = e.what();
+    EXPECT_NE(what.find("inline.json"), std::string::npos) << what;
+    EXPECT_NE(what.find("/cloths/0/material/preset"), std::string::npos) << what;
+    EXPECT_NE(what.find("expected a fabric preset: one of 11oz-black-denim, royal-target"), std::string::npos) << what;
+  }
+  try {
+    model_of(R"({"cloths": [{"grid": {}, "material": {"preset": "royal-target", "bend": 1}}]})");
+    ADD_FAILURE() << "no error";
+  } catch (const SceneError& e) {
+    EXPECT_NE(std::string(e.what()).find("expected no 'bend' beside a 'preset'"), std::string::npos) << e.what();
+  }
+}
