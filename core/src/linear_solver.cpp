@@ -7,10 +7,6 @@
 namespace drape {
 namespace {
 
-// Systems with fewer rows use CHOLMOD's simplicial factorisation, larger ones the supernodal
-// one (dense BLAS kernels). Measured with OpenBLAS (serial): a 625-vertex cloth (1,869 rows)
-// 11 vs 15 ms a solve, 1,681 vertices 44 vs 45 ms, 10,201 vertices 1,110 vs 510 ms.
-constexpr Eigen::Index SUPERNODAL_MIN_ROWS = 15000;
 
 class CholmodSolver final : public LinearSolver {
  public:
@@ -172,8 +168,22 @@ bool CholmodFactor::factorise(const SparseMatrix& A) {
   if (f.empty) return true;  // nothing free (every vertex pinned): CHOLMOD refuses an empty matrix
   serial_openmp();
   if (!f.same_pattern(A)) {
-    const bool supernodal = use_ == Use::Refactorised && A.rows() >= SUPERNODAL_MIN_ROWS;
-    f.llt.setMode(supernodal ? Eigen::CholmodSupernodalLLt : Eigen::CholmodSimplicialLLt);
+    // A system factorised every step takes CHOLMOD's own choice: the supernodal factorisation
+    // (dense BLAS kernels) when the factor's flops per nonzero reach its supernodal_switch
+    // (40), else the simplicial LL'. A row count threshold (simplicial below 15,000 rows) had
+    // been measured while CHOLMOD's OpenMP threads spun on this 2-core machine: with them
+    // serial, the supernodal factorisation took the default scene's first 20 frames' solve from
+    // 8.3 to 2.3 s, the hanging cloth's (625 vertices) from 0.68 to 0.25 s. A factor reused
+    // for many solves stays simplicial: its triangular solves with three right-hand sides are
+    // the faster ones (docs/solvers.md).
+    f.llt.setMode(Eigen::CholmodSimplicialLLt);
+    if (use_ == Use::Refactorised) {
+      f.llt.setMode(Eigen::CholmodAuto);
+      f.llt.analyzePattern(A);
+      const cholmod_common& c = f.llt.cholmod();
+      if (c.lnz > 0 && c.fl / c.lnz >= c.supernodal_switch) f.llt.setMode(Eigen::CholmodSupernodalLLt);
+      else f.llt.setMode(Eigen::CholmodSimplicialLLt);
+    }
     f.llt.analyzePattern(A);
     ++f.analyses;
     f.remember_pattern(A);
