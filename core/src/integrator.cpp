@@ -115,21 +115,26 @@ void add_wind(const Model& model, const State& state, std::vector<Vec3>& forces)
 }  // namespace
 
 Scalar Integrator::limit_strain(const std::vector<Vec3>& positions, std::vector<Vec3>& motion, std::vector<Vec3>* also,
-                                StepReport& report) {
+                                StepReport& report, const std::vector<char>* held) {
   const Model& m = model_;
   const Workspace& w = *work_;
   const Scalar h = h_;
   const auto begin = std::chrono::steady_clock::now();
-  const auto inverse_mass = [&](int v) { return w.free_index[std::size_t(v)] >= 0 ? 1 / m.masses[std::size_t(v)] : 0.0; };
+  const auto inverse_mass = [&](int v) {
+    return w.free_index[std::size_t(v)] >= 0 && !(held && (*held)[std::size_t(v)]) ? 1 / m.masses[std::size_t(v)] : 0.0;
+  };
   Scalar work = 0;
   for (int sweep = 0; sweep < STRAIN_LIMIT_SWEEPS; ++sweep) {
     bool passed = false;
     for (int k : w.limited_springs) {
       const Spring& s = m.springs[std::size_t(k)];
       const Vec3 d = positions[s.i] + h * motion[s.i] - positions[s.j] - h * motion[s.j];
-      // A spring the response left past its limit at the step's start is kept from stretching
-      // further, not pulled back within one step (a closing speed of its excess over h).
-      const Scalar length = d.norm(), longest = std::max(s.limit * s.rest_length, (positions[s.i] - positions[s.j]).norm());
+      // A spring the response left past its limit at the step's start is pulled back by
+      // STRAIN_RECOVERY of its excess in the step, not all of it at once (a closing speed of
+      // its whole excess over h), nor none (it would ratchet up, step by step, by what the
+      // response adds).
+      const Scalar limit = s.limit * s.rest_length, start = (positions[s.i] - positions[s.j]).norm();
+      const Scalar length = d.norm(), longest = start > limit ? start - STRAIN_RECOVERY * (start - limit) : limit;
       if (!(length > longest)) continue;
       const Scalar wi = inverse_mass(s.i), wj = inverse_mass(s.j);
       if (!(wi + wj > 0)) continue;  // both ends pinned: their handles decide
@@ -213,10 +218,11 @@ StepReport Integrator::advance(State& state) {
     if (projective_) spread_projective(state.positions, solved, motion, state.velocities, report);
     else spread_response(solved, held, motion, state.velocities, report);
     if (!report.ok) return report;
-    // The projective spread solves the step again for the vertices it does not hold: the limit
-    // once more, on the motion and the velocities alike.
-    if (projective_ && !w.limited_springs.empty())
-      report.external_work += limit_strain(state.positions, motion, &state.velocities, report);
+    // The spread solves the step again for the vertices it does not hold: the limit once more,
+    // on the motion and the velocities alike, moving those vertices only (the held ones are
+    // where the response put them: moved back, the response would stretch their springs again).
+    if (!w.limited_springs.empty())
+      report.external_work += limit_strain(state.positions, motion, &state.velocities, report, &held);
     respond(state, motion, report);
   }
   report.obstacle_contacts = first_contacts;

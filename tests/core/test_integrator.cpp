@@ -219,10 +219,11 @@ TEST(Integrator, StrainLimitingKeepsTheLimitAndTheMomentum) {
   EXPECT_GT(corrections, 0);
 }
 
-// A spring that starts a step past its limit (the collision response may leave one) is kept
-// from stretching further, not snapped back within the step (its excess over h as a closing
-// speed: 0.025 m over 0.01 s): a cloth at rest with one corner pulled 20 % out along an edge
-// moves exactly as without a limit, by its springs' pull alone.
+// A spring that starts a step past its limit (the collision response may leave one) is not
+// snapped back within the step (its excess over h as a closing speed: 0.025 m over 0.01 s):
+// it must end at most STRAIN_RECOVERY (half) of its excess shorter, and a cloth at rest with one
+// corner pulled 20 % out along an edge, which its springs pull back faster than that, moves
+// exactly as without a limit.
 TEST(Integrator, StrainLimitingDoesNotSnapBackASpringAlreadyPastItsLimit) {
   const auto pulled = [](const std::string& limit) {
     const Model model = model_of(R"({"frame_time": 0.02, "frame_steps": 2, "gravity": [0, 0, 0],
@@ -238,4 +239,39 @@ TEST(Integrator, StrainLimitingDoesNotSnapBackASpringAlreadyPastItsLimit) {
   };
   const std::vector<Vec3> free = pulled(""), limited = pulled(R"(, "strain_limit": 1.05)");
   for (std::size_t v = 0; v < free.size(); ++v) EXPECT_EQ(limited[v], free[v]) << v;
+}
+
+// Issue 20's target for strain limiting: a curtain pinned along its top and struck by a ball
+// keeps every structural spring within the limit plus 1 % after every step, though the
+// collision response moves the cloth after the limit acts: springs at 4 and 8 m/s, the
+// royal-target fabric at 4 m/s: 1.0149, 1.0501 and 1.0500 (1.0149, 1.0532 and 1.0512 before
+// the response's spread was limited again and a spring's excess at a step's start was taken
+// back by half). Not held: the fabric at 8 m/s reaches 1.19 (1.26 before) where the ball's
+// response pushes two of its contact vertices apart (docs/materials.md). Shear springs are not
+// limited: a fabric shears to wrap a sphere.
+TEST(Integrator, StrainLimitingHoldsAStruckCurtainWithinTheLimitEveryStep) {
+  const Scalar limit = 1.05;
+  const std::string springs = R"({"density": 0.15, "stretch": 2000, "shear": 200, "bend": 0.2, "strain_limit": 1.05})";
+  const std::string fabric = R"({"preset": "royal-target", "strain_limit": 1.05})";
+  for (const auto& [material, speed] : {std::pair{springs, 4.0}, std::pair{springs, 8.0}, std::pair{fabric, 4.0}}) {
+    const Model model = model_of(R"({"frame_time": 0.033333333333333333, "frame_steps": 10, "frames": 25,
+      "cloths": [{"grid": {"size": [1.0, 1.0], "resolution": [16, 16]},
+                  "transform": {"translate": [0, 0, 1.5], "rotate": [90, 1, 0, 0]}, "material": )" + material + R"(}],
+      "handles": [{"cloth": 0, "box": {"min": [-1, -1, 1.99], "max": [1, 1, 2.01]}}],
+      "obstacles": [{"sphere": {"center": [0.05, -0.6, 1.45], "radius": 0.1},
+                     "motion": {"velocity": [0, )" + std::to_string(speed) + R"(, 0], "end": )" + std::to_string(2.4 / speed) +
+                                 R"(}}], "friction": 0.3, "collisions": {"self": true, "thickness": 0.005}})");
+    State state = initial_state(model);
+    Integrator integrator(model);
+    Scalar largest = 1;
+    for (int k = 0; k < model.scene.frames * model.scene.frame_steps; ++k) {
+      const StepReport r = integrator.step(state);
+      ASSERT_TRUE(r.ok) << r.failure;
+      for (const Spring& s : model.springs)
+        if (s.kind == SpringKind::Stretch)
+          largest = std::max(largest, (state.positions[s.i] - state.positions[s.j]).norm() / s.rest_length);
+    }
+    EXPECT_LE(largest, limit * 1.01) << material << " at " << speed << " m/s";
+    EXPECT_GT(largest, 1.01) << material << " at " << speed << " m/s";  // struck hard enough to stretch
+  }
 }
