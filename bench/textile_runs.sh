@@ -1,0 +1,77 @@
+#!/usr/bin/env bash
+# The textile laboratory's two tests on every fabric preset (issue 20; docs/materials.md):
+# - the Cusick drape test (scenes/cusick_drape.json's geometry) on the 30 cm disc at two
+#   resolutions, 12.5 mm and 6 mm edges (scenes/meshes/disc_30cm_12mm.obj, 12 rings, 469
+#   vertices; disc_30cm.obj, 25 rings, 1,951 vertices: 2.08 times finer), each run in full
+#   with the independent penetration check (--check): the drape coefficient and nodes at the
+#   last frame and 20 frames before it (to show it has settled), and the change between the
+#   resolutions;
+# - the cantilever test (scenes/cantilever.json's strip) with each preset: measured / elastica.
+# The source of the presets publishes no Cusick figures for them: the table says so.
+# Prints one line per preset and exits 1 when a run fails. Long (about 15 minutes on this
+# 2-core machine): a benchmark, not a test.
+# Usage: bench/textile_runs.sh [BUILD_DIR] [OUT]; PRESETS="royal-target denim..." for a subset.
+set -uo pipefail
+cd "$(dirname "$0")/.."
+ROOT=$(pwd)
+BUILD_DIR=${1:-build}
+OUT=${2:-out/textile_runs}
+DRAPE="$BUILD_DIR/app/drape"
+PRESETS=${PRESETS:-11oz-black-denim royal-target white-dots-on-blk gray-interlock navy-sparkle-sweat}
+mkdir -p "$OUT"
+failed=0
+
+# The Cusick scene on one disc mesh with one preset.
+cusick_scene() {
+  cat <<JSON
+{"frame_time": 0.033333333333333333, "frame_steps": 10, "frames": 60, "gravity": [0, 0, -9.81],
+ "cloths": [{"mesh": "$ROOT/scenes/meshes/$2", "transform": {"translate": [0, 0, 0.32]}, "material": {"preset": "$1"}}],
+ "obstacles": [{"mesh": "$ROOT/scenes/meshes/cusick_support.obj"}, {"plane": {"point": [0, 0, 0], "normal": [0, 0, 1]}}],
+ "collisions": {"self": true, "obstacles": true}}
+JSON
+}
+
+# "coefficient nodes" of a run's frame.
+measure() {
+  "$DRAPE" measure cusick "$1" --frame "$2" --json | sed -E 's/.*"drape_coefficient": ([0-9.-]+), "nodes": ([0-9]+).*/\1 \2/'
+}
+
+printf "%-19s | %-29s | %-29s | %-8s | %-6s | %-11s | %s\n" preset "Cusick 12.5 mm: DC (f40) nodes" "Cusick 6 mm: DC (f40) nodes" \
+  "DC diff" "pen" "cantilever" "published DC, nodes"
+for preset in $PRESETS; do
+  cells=()
+  last=()
+  pen=0
+  for mesh in disc_30cm_12mm.obj disc_30cm.obj; do
+    run="$OUT/cusick-$preset-${mesh%.obj}"
+    cusick_scene "$preset" "$mesh" > "$OUT/cusick-$preset-${mesh%.obj}.json"
+    start=$(date +%s%N)
+    if ! "$DRAPE" run "$OUT/cusick-$preset-${mesh%.obj}.json" --check --quiet --overwrite --out "$run"; then
+      echo "$preset on $mesh: the run failed" >&2
+      failed=1
+      cells+=("failed")
+      continue
+    fi
+    seconds=$(awk -v a="$start" -v b="$(date +%s%N)" 'BEGIN { printf "%.0f", (b - a) / 1e9 }')
+    read -r dc nodes < <(measure "$run" 60)
+    read -r dc40 _ < <(measure "$run" 40)
+    pen=$((pen + $(awk -F, 'NR == 1 { for (i = 1; i <= NF; ++i) c[$i] = i; next } { p += $c["penetrations"] } END { print p + 0 }' "$run/stats.csv")))
+    cells+=("$(printf "%.3f (%.3f) %d, %s s" "$dc" "$dc40" "$nodes" "$seconds")")
+    last+=("$dc")
+  done
+  diff=-
+  [ ${#last[@]} -eq 2 ] && diff=$(awk -v a="${last[0]}" -v b="${last[1]}" 'BEGIN { d = b - a; printf "%+.3f", d }')
+  # The cantilever with this preset.
+  sed -E -e "s/\"preset\": \"[a-z0-9-]+\"/\"preset\": \"$preset\"/" -e "s|\"mesh\": \"meshes/|\"mesh\": \"$ROOT/scenes/meshes/|" \
+    scenes/cantilever.json > "$OUT/cantilever-$preset.json"
+  ratio=failed
+  if "$DRAPE" run "$OUT/cantilever-$preset.json" --quiet --overwrite --out "$OUT/cantilever-$preset"; then
+    ratio=$("$DRAPE" measure cantilever "$OUT/cantilever-$preset" --json | sed -E 's/.*"drop_over_elastica": ([0-9.]+).*/\1/')
+  else
+    failed=1
+  fi
+  [ "$pen" -eq 0 ] || failed=1
+  printf "%-19s | %-29s | %-29s | %-8s | %-6s | %-11s | %s\n" "$preset" "${cells[0]:-}" "${cells[1]:-}" "$diff" "$pen" "$ratio" \
+    "none published (Wang et al. 2011)"
+done
+exit $failed
