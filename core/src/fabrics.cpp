@@ -29,6 +29,12 @@ const MeasuredFabric* find_measured_fabric(const std::string& name) {
   return it == all.end() ? nullptr : &*it;
 }
 
+std::string measured_fabric_names() {
+  std::string names;
+  for (const MeasuredFabric& f : measured_fabrics()) names += (names.empty() ? "" : ", ") + f.name;
+  return names;
+}
+
 FabricPreset fabric_preset(const MeasuredFabric& fabric) {
   // The simulator's moduli: twice the file's numbers, negative ones clamped to zero.
   const auto k = [&](int i) { return 2 * std::max(Scalar(0), fabric.stretching[std::size_t(i)]); };
@@ -39,6 +45,14 @@ FabricPreset fabric_preset(const MeasuredFabric& fabric) {
   p.shear_stiffness = k(3) / 2;
   p.bending_rigidity = HINGE_CONSTANT_TO_RIGIDITY * (fabric.bending[0] + fabric.bending[1] + fabric.bending[2]) / 3;
   return p;
+}
+
+void apply_fabric_preset(const MeasuredFabric& fabric, bool grid, Material& material) {
+  const FabricPreset p = fabric_preset(fabric);
+  material.density = p.density;
+  material.tensile_stiffness = p.tensile_stiffness;
+  if (grid) material.shear_stiffness = p.shear_stiffness;
+  material.bending_rigidity = p.bending_rigidity;
 }
 
 }  // namespace drape

@@ -129,10 +129,8 @@ Scalar Integrator::limit_strain(const std::vector<Vec3>& positions, std::vector<
     for (int k : w.limited_springs) {
       const Spring& s = m.springs[std::size_t(k)];
       const Vec3 d = positions[s.i] + h * motion[s.i] - positions[s.j] - h * motion[s.j];
-      // A spring the response left past its limit at the step's start is pulled back by
-      // STRAIN_RECOVERY of its excess in the step, not all of it at once (a closing speed of
-      // its whole excess over h), nor none (it would ratchet up, step by step, by what the
-      // response adds).
+      // A spring the response left past its limit is pulled back by STRAIN_RECOVERY of its
+      // excess: not all at once (its excess over h as a speed), nor none (a ratchet).
       const Scalar limit = s.limit * s.rest_length, start = (positions[s.i] - positions[s.j]).norm();
       const Scalar length = d.norm(), longest = start > limit ? start - STRAIN_RECOVERY * (start - limit) : limit;
       if (!(length > longest)) continue;

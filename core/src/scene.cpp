@@ -225,19 +225,10 @@ ClothSpec read_cloth(const Node& n) {
              "bending_rigidity", "damping", "air_damping", "strain_limit"});
     // A preset is a measured fabric in the fabric's keys (fabrics.h); keys beside it override
     // its numbers. A mesh's shear follows from its tensile stiffness, so a preset sets none there.
-    const MeasuredFabric* preset = nullptr;
-    if (m.has("preset")) {
-      std::string names;
-      for (const MeasuredFabric& f : measured_fabrics()) names += (names.empty() ? "" : ", ") + f.name;
-      const std::string name = m.at("preset").string();
-      preset = find_measured_fabric(name);
-      if (!preset) m.at("preset").fail("expected a fabric preset: one of " + names + " (docs/materials.md)");
-      const FabricPreset p = fabric_preset(*preset);
-      c.material.density = p.density;
-      c.material.tensile_stiffness = p.tensile_stiffness;
-      if (c.grid) c.material.shear_stiffness = p.shear_stiffness;
-      c.material.bending_rigidity = p.bending_rigidity;
-    }
+    const MeasuredFabric* preset = m.has("preset") ? find_measured_fabric(m.at("preset").string()) : nullptr;
+    if (m.has("preset") && !preset)
+      m.at("preset").fail("expected a fabric preset: one of " + measured_fabric_names() + " (docs/materials.md)");
+    if (preset) apply_fabric_preset(*preset, c.grid.has_value(), c.material);
     // A material is the springs' constants or the fabric's measurements, not a mix: a spring
     // key beside the fabric's stiffnesses would be silently ignored or (bend springs) stiffen
     // the sheet by an amount that depends on the resolution.

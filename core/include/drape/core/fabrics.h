@@ -11,7 +11,7 @@
 #include <string>
 #include <vector>
 
-#include "drape/core/mesh.h"
+#include "drape/core/scene.h"
 
 namespace drape {
 
@@ -38,6 +38,9 @@ const std::vector<MeasuredFabric>& measured_fabrics();
 /// The fabric named, or nullptr.
 const MeasuredFabric* find_measured_fabric(const std::string& name);
 
+/// Their names, in order, separated by commas (for messages).
+std::string measured_fabric_names();
+
 /// A measured fabric in drape's units.
 struct FabricPreset {
   Scalar density = 0;            ///< kg/m^2
@@ -57,5 +60,9 @@ inline constexpr Scalar HINGE_CONSTANT_TO_RIGIDITY = 0.25;
 /// their mean; the shear stiffness is k3 / 2 = c3 (the energy k3 e_uv^2 with the shear angle
 /// 2 e_uv); the bending rigidity is HINGE_CONSTANT_TO_RIGIDITY times the mean hinge constant.
 FabricPreset fabric_preset(const MeasuredFabric& fabric);
+
+/// Sets a material's fabric keys to the preset's: density, tensile stiffness, bending rigidity
+/// and, on a grid (`grid`), shear stiffness (a mesh's shear follows from its tensile stiffness).
+void apply_fabric_preset(const MeasuredFabric& fabric, bool grid, Material& material);
 
 }  // namespace drape
