@@ -119,12 +119,12 @@ class Integrator {
   // Strain limiting after the solve (Provot 1995, on velocities as Bridson, Fedkiw and
   // Anderson 2002): each limited spring whose length at the step's end (positions + h motion)
   // would pass its limit gets equal and opposite changes of its ends' motion along it (by
-  // inverse mass; pinned ends, and the vertices `held` marks when given, keep theirs), also
-  // made to also when given, in sweeps over the springs until none passes or the sweeps run
-  // out. A spring longer than its limit at the step's start may end STRAIN_RECOVERY of its
-  // excess shorter. Returns the work the handles did through it (J).
+  // inverse mass; pinned ends keep theirs), also made to also when given, in sweeps over the
+  // springs until none passes or the sweeps run out. A spring longer than its limit at the
+  // step's start may end STRAIN_RECOVERY of its excess shorter. Returns the work the handles
+  // did through it (J).
   Scalar limit_strain(const std::vector<Vec3>& positions, std::vector<Vec3>& motion, std::vector<Vec3>* also,
-                      StepReport& report, const std::vector<char>* held = nullptr);
+                      StepReport& report);
   // The linearised system assembled at the state (forces into the workspace) and solved:
   // the state's velocities advanced; false (report says why) when the solve failed.
   bool solve_linearised(State& state, const std::vector<Vec3>& pinned_dv, StepReport& report);
