@@ -4,7 +4,8 @@ files are committed. icosphere.obj: a unit sphere, an icosahedron subdivided 3 t
 triangles). box.obj: a unit cube centred on the origin, each face a 4x4 grid (192 triangles).
 disc_30cm.obj: the Cusick drape test's specimen, a 30 cm disc in z = 0 of 25 concentric rings
 (ring k holds 6k vertices, 6 mm apart: 1,951 vertices, 3,750 triangles), the mesh a user brings;
-disc_30cm_12mm.obj the same disc of 12 rings 12.5 mm apart (469 vertices), for bench/textile_runs.sh.
+disc_30cm_12mm.obj and disc_30cm_3mm.obj the same disc of 12 rings 12.5 mm apart (469 vertices) and 50
+rings 3 mm apart (7,651 vertices), for bench/textile_runs.sh.
 cusick_support.obj: an 18 cm disc support, a closed cylinder of radius 0.09 m and height 0.3 m
 standing on z = 0 (64 segments around). table.obj: a table, a top 1.2 x 0.8 x 0.04 m at 0.75 m and
 four legs 0.05 x 0.05 m under it, each a separate closed box of 4x4 quads a face (the table-like
@@ -145,6 +146,7 @@ write(os.path.join(here, "icosphere.obj"), *icosphere(3), "unit icosphere, 3 sub
 write(os.path.join(here, "box.obj"), *box(4), "unit cube, 4x4 quads a face (tools/make_meshes.py)")
 write(os.path.join(here, "disc_30cm.obj"), *disc(0.15, 25), "30 cm disc, 25 rings 6 mm apart (tools/make_meshes.py)")
 write(os.path.join(here, "disc_30cm_12mm.obj"), *disc(0.15, 12), "30 cm disc, 12 rings 12.5 mm apart (tools/make_meshes.py)")
+write(os.path.join(here, "disc_30cm_3mm.obj"), *disc(0.15, 50), "30 cm disc, 50 rings 3 mm apart (tools/make_meshes.py)")
 write(os.path.join(here, "cusick_support.obj"), *cylinder(0.09, 0.3, 64, 4),
       "18 cm support: cylinder r 0.09 m, h 0.3 m on z = 0 (tools/make_meshes.py)")
 write(os.path.join(here, "table.obj"), *table(),
