@@ -308,6 +308,12 @@ Model build_model(const Scene& scene) {
         if (handle.box->contains(model.initial_positions[v])) chosen.push_back(v), ++found;
       if (found == 0) fail(scene, path + "/box", "the box holds no vertex of cloth " + std::to_string(handle.cloth));
     }
+    if (handle.ball) {
+      std::size_t found = 0;
+      for (int v = range.first_vertex; v < range.first_vertex + range.vertex_count; ++v)
+        if (handle.ball->contains(model.initial_positions[v])) chosen.push_back(v), ++found;
+      if (found == 0) fail(scene, path + "/ball", "the ball holds no vertex of cloth " + std::to_string(handle.cloth));
+    }
     for (int v : chosen) {
       model.initial_velocities[v] = handle.motion.velocity_at(model.initial_positions[v], 0);
       if (model.pin_of_vertex[v] >= 0) continue;  // already pinned by an earlier handle

@@ -223,8 +223,7 @@ ClothSpec read_cloth(const Node& n) {
     const Node m = n.at("material");
     m.allow({"preset", "density", "mass_per_area", "stretch", "tensile_stiffness", "shear", "shear_stiffness", "bend",
              "bending_rigidity", "damping", "air_damping", "strain_limit"});
-    // A preset is a measured fabric in the fabric's keys (fabrics.h); keys beside it override
-    // its numbers. A mesh's shear follows from its tensile stiffness, so a preset sets none there.
+    // A preset is a measured fabric in the fabric's keys (fabrics.h); keys beside it override it.
     const MeasuredFabric* preset = m.has("preset") ? find_measured_fabric(m.at("preset").string()) : nullptr;
     if (m.has("preset") && !preset)
       m.at("preset").fail("expected a fabric preset: one of " + measured_fabric_names() + " (docs/materials.md)");
@@ -267,7 +266,7 @@ ClothSpec read_cloth(const Node& n) {
 }
 
 HandleSpec read_handle(const Node& n, std::size_t cloth_count) {
-  n.allow({"cloth", "nodes", "corners", "box", "motion"});
+  n.allow({"cloth", "nodes", "corners", "box", "ball", "motion"});
   HandleSpec h;
   if (n.has("cloth")) h.cloth = n.at("cloth").integer_in(0, int(cloth_count) - 1);
   if (n.has("nodes"))
@@ -276,7 +275,12 @@ HandleSpec read_handle(const Node& n, std::size_t cloth_count) {
     for (const Node& c : n.at("corners").array(1))
       h.corners.push_back(c.one_of({"bottom-left", "bottom-right", "top-left", "top-right"}));
   if (n.has("box")) h.box = read_box(n.at("box"));
-  if (h.nodes.empty() && h.corners.empty() && !h.box) n.fail("expected 'nodes', 'corners' or 'box' to choose the pinned vertices");
+  if (n.has("ball")) n.at("ball").allow({"center", "radius"});
+  if (n.has("ball"))
+    h.ball = Ball{n.at("ball").at("center").vec3_within(MAX_COORDINATE, "m"),
+                  n.at("ball").at("radius").number_in(MIN_LENGTH, MAX_SIZE, "from 1e-6 to 1e4 (m)")};
+  if (h.nodes.empty() && h.corners.empty() && !h.box && !h.ball)
+    n.fail("expected 'nodes', 'corners', 'box' or 'ball' to choose the pinned vertices");
   if (n.has("motion")) h.motion = read_motion(n.at("motion"));
   return h;
 }

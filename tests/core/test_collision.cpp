@@ -285,9 +285,10 @@ TEST(Collision, ImpulsesActAlongTiltedNormalsOfFacesAndEdges) {
     EXPECT_GT(changed, 0) << edges;
     // The strip's contacts are at inner points of its edges, so its vertices share the
     // separation by their weights; the square's are its vertices themselves.
-    if (!edges)
+    if (!edges) {
       for (int v = model.cloths[1].first_vertex; v < int(motion.size()); ++v)
         EXPECT_NEAR(motion[std::size_t(v)].dot(normal), SEPARATION_FRACTION * 0.003 / h, 1e-9) << v;
+    }
     EXPECT_TRUE(collision_free(model, start, h, motion)) << edges;
   }
 }
@@ -337,7 +338,9 @@ TEST(Collision, AnImpactZoneTouchingAPinnedVertexMovesWithIt) {
   EXPECT_EQ(c.fail_safes, 0);
   int carried_along = 0;
   for (std::size_t v = 0; v < motion.size(); ++v) {
-    if (zones_only.pin_of_vertex[v] >= 0) EXPECT_EQ(motion[v], carried) << v;
+    if (zones_only.pin_of_vertex[v] >= 0) {
+      EXPECT_EQ(motion[v], carried) << v;
+    }
     carried_along += int(v) >= zones_only.cloths[1].first_vertex && (motion[v] - carried).norm() < 1e-12;
   }
   EXPECT_GT(carried_along, 0);

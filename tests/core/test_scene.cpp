@@ -64,12 +64,18 @@ TEST(Scene, ZeroStiffnessCreatesNoSprings) {
   for (const Spring& s : no_bend.springs) EXPECT_EQ(s.kind, SpringKind::Stretch);
 }
 
-TEST(Scene, HandlesByCornerNodeAndBox) {
+TEST(Scene, HandlesByCornerNodeBoxAndBall) {
   const Model m = build_model(parse_scene(R"({"cloths": [{"grid": {"resolution": [4, 4]}}],
     "handles": [{"corners": ["top-left", "top-right"]}, {"nodes": [12]}, {"box": {"min": [-1, -1, -1], "max": [-0.4, -0.4, 1]}}]})",
                                           "h.json"));
   EXPECT_EQ(m.pins.size(), 4u);  // two corners, the centre, the bottom-left corner
   EXPECT_GE(m.pin_of_vertex[12], 0);
+  // A ball of 0.3 m around the centre of the 1 m grid of 0.25 m quads: the centre and its four
+  // axis neighbours (0.25 m away), not the diagonal ones (0.35 m).
+  const Model ball = build_model(parse_scene(R"({"cloths": [{"grid": {"resolution": [4, 4]}}],
+    "handles": [{"ball": {"center": [0, 0, 0], "radius": 0.3}}]})", "b.json"));
+  EXPECT_EQ(ball.pins.size(), 5u);
+  for (const Pin& p : ball.pins) EXPECT_LE(ball.initial_positions[p.vertex].norm(), 0.3);
 }
 
 TEST(Scene, BadInputNamesTheFileThePathAndWhatWasExpected) {
@@ -139,7 +145,10 @@ TEST(Scene, BadInputNamesTheFileThePathAndWhatWasExpected) {
       {R"({"cloths": [{"grid": {}}], "handles": [{"nodes": [100000]}]})", "/handles/0/nodes/0: vertex 100000 does not exist"},
       {R"({"cloths": [{"grid": {}}], "handles": [{"cloth": 1, "nodes": [0]}]})", "/handles/0/cloth: expected an integer from 0 to 0"},
       {R"({"cloths": [{"grid": {}}], "handles": [{"box": {"min": [5, 5, 5], "max": [6, 6, 6]}}]})", "/handles/0/box: the box holds no vertex"},
-      {R"({"cloths": [{"grid": {}}], "handles": [{}]})", "/handles/0: expected 'nodes', 'corners' or 'box'"},
+      {R"({"cloths": [{"grid": {}}], "handles": [{}]})", "/handles/0: expected 'nodes', 'corners', 'box' or 'ball'"},
+      {R"({"cloths": [{"grid": {}}], "handles": [{"ball": {"center": [5, 5, 5], "radius": 1}}]})", "/handles/0/ball: the ball holds no vertex"},
+      {R"({"cloths": [{"grid": {}}], "handles": [{"ball": {"center": [0, 0, 0], "radius": -1}}]})",
+       "/handles/0/ball/radius: expected a number from 1e-6 to 1e4 (m), found -1"},
       {R"({"cloths": [{"grid": {}}], "handles": [{"corners": ["middle"]}]})", "/handles/0/corners/0: expected one of 'bottom-left'"},
       {R"({"cloths": [{"mesh": "nowhere.obj"}]})", "/cloths/0/mesh: nowhere.obj: no such mesh file"},
       {R"({"cloths": [{"grid": {}}], "output": {"mesh_format": "xyz"}})", "/output/mesh_format: expected one of"},

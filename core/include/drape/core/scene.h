@@ -126,11 +126,19 @@ struct Box {
 
 /// Pinned vertices of one cloth, chosen by index, by grid corner name or by a box around their
 /// initial positions; they follow motion when given, else stay put.
+/// A ball: the vertices whose initial positions lie within `radius` of `center`.
+struct Ball {
+  Vec3 center = Vec3::Zero();
+  Scalar radius = 0;
+  bool contains(const Vec3& x) const { return (x - center).norm() <= radius; }
+};
+
 struct HandleSpec {
   int cloth = 0;
   std::vector<int> nodes;
   std::vector<std::string> corners;
   std::optional<Box> box;
+  std::optional<Ball> ball;  ///< e.g. the Cusick test's clamp: a disc of the cloth around its centre
   Motion motion;
 };
 
