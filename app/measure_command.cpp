@@ -84,6 +84,10 @@ int measure_cantilever_test(const MeasureArguments& args, const Model& model, in
   }
   const Material& material = model.scene.cloths.front().material;
   const Scalar weight = material.density * model.scene.gravity.norm();  // N/m^2
+  if (!(weight > 0)) {
+    std::cerr << "drape measure: " << args.folder << ": expected gravity (the strip bends under its own weight)\n";
+    return EXIT_BAD_INPUT;
+  }
   const Scalar rigidity = material.bending_rigidity;                      // N m, 0 for bending springs
   const Scalar expected_length = rigidity > 0 ? std::cbrt(rigidity / weight) : 0;
   const Scalar expected_drop = rigidity > 0 ? heavy_elastica_drop(r.clamped_length(), weight / rigidity) : 0;

@@ -16,6 +16,7 @@ OUT=${2:-out/bending_speed}
 DRAPE="$BUILD_DIR/app/drape"
 FRAMES=${FRAMES:-30}
 PAIRS=${PAIRS:-3}
+[[ "$PAIRS" =~ ^[1-9][0-9]*$ && "$FRAMES" =~ ^[1-9][0-9]*$ ]] || { echo "bending_speed.sh: expected PAIRS and FRAMES of 1 or more" >&2; exit 2; }
 mkdir -p "$OUT"
 declare -A MATERIAL=(
   [springs]='{"density": 0.15, "stretch": 2000, "shear": 200, "bend": 0.5, "damping": 0.002}'

@@ -53,28 +53,39 @@ for preset in $PRESETS; do
       echo "$preset on $mesh: the run failed" >&2
       failed=1
       cells+=("failed")
+      last+=("")
       continue
     fi
     seconds=$(awk -v a="$start" -v b="$(date +%s%N)" 'BEGIN { printf "%.0f", (b - a) / 1e9 }')
     read -r dc nodes < <(measure "$run" 60)
     read -r dc40 _ < <(measure "$run" 40)
+    if ! [[ "$dc" =~ ^-?[0-9.]+$ && "$dc40" =~ ^-?[0-9.]+$ && "$nodes" =~ ^[0-9]+$ ]]; then
+      echo "$preset on $mesh: drape measure cusick failed" >&2
+      failed=1
+      cells+=("failed")
+      last+=("")
+      continue
+    fi
     pen=$((pen + $(awk -F, 'NR == 1 { for (i = 1; i <= NF; ++i) c[$i] = i; next } { p += $c["penetrations"] } END { print p + 0 }' "$run/stats.csv")))
     cells+=("$(printf "%.3f (%.3f) %d, %s s" "$dc" "$dc40" "$nodes" "$seconds")")
     last+=("$dc")
   done
   diff=""
-  for ((k = 1; k < ${#last[@]}; ++k)); do
-    diff+=$(awk -v a="${last[k - 1]}" -v b="${last[k]}" 'BEGIN { printf "%+.3f ", b - a }')
+  for ((k = 1; k < ${#last[@]}; ++k)); do  # a failed resolution leaves its changes as "-"
+    if [ -n "${last[k - 1]}" ] && [ -n "${last[k]}" ]; then
+      diff+=$(awk -v a="${last[k - 1]}" -v b="${last[k]}" 'BEGIN { printf "%+.3f ", b - a }')
+    else
+      diff+="- "
+    fi
   done
   # The cantilever with this preset.
   sed -E -e "s/\"preset\": \"[a-z0-9-]+\"/\"preset\": \"$preset\"/" -e "s|\"mesh\": \"meshes/|\"mesh\": \"$ROOT/scenes/meshes/|" \
     scenes/cantilever.json > "$OUT/cantilever-$preset.json"
   ratio=failed
   if "$DRAPE" run "$OUT/cantilever-$preset.json" --quiet --overwrite --out "$OUT/cantilever-$preset"; then
-    ratio=$("$DRAPE" measure cantilever "$OUT/cantilever-$preset" --json | sed -E 's/.*"drop_over_elastica": ([0-9.]+).*/\1/')
-  else
-    failed=1
+    ratio=$("$DRAPE" measure cantilever "$OUT/cantilever-$preset" --json | sed -nE 's/.*"drop_over_elastica": ([0-9.]+).*/\1/p')
   fi
+  [ -n "$ratio" ] && [ "$ratio" != failed ] || { ratio=failed; failed=1; }
   [ "$pen" -eq 0 ] || failed=1
   joined=$(printf "%s; " "${cells[@]}")
   printf "%-19s | %s | %-8s | %-6s | %-11s | %s\n" "$preset" "${joined%; }" "${diff:--}" "$pen" "$ratio" \

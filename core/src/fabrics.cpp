@@ -1,6 +1,7 @@
 #include "drape/core/fabrics.h"
 
 #include <algorithm>
+#include <cassert>
 
 namespace drape {
 
@@ -39,6 +40,7 @@ FabricPreset fabric_preset(const MeasuredFabric& fabric) {
   // The simulator's moduli: twice the file's numbers, negative ones clamped to zero.
   const auto k = [&](int i) { return 2 * std::max(Scalar(0), fabric.stretching[std::size_t(i)]); };
   const Scalar c11 = k(0), c12 = k(1), c22 = k(2);
+  assert(c11 > 0 && c22 > 0 && c12 * c12 < c11 * c22 && "a measured fabric's moduli are positive definite");
   FabricPreset p;
   p.density = fabric.density;
   p.tensile_stiffness = 0.5 * ((c11 - c12 * c12 / c22) + (c22 - c12 * c12 / c11));

@@ -42,8 +42,6 @@ inline constexpr Scalar HELD_GAP = 1.05;
 inline constexpr Scalar STEP_ENERGY_TOLERANCE = 1e-3;
 // Strain limiting's sweeps over the limited springs a step, at most.
 inline constexpr int STRAIN_LIMIT_SWEEPS = 200;
-/// The share of a spring's excess over its limit at a step's start that the step takes back.
-inline constexpr Scalar STRAIN_RECOVERY = 0.5;
 
 // The system matrix over the free vertices, with the place of every 3x3 block in its
 // compressed storage: a block (a, b) occupies rows 3a..3a+2 of columns 3b..3b+2, and the three

@@ -173,18 +173,17 @@ bool CholmodFactor::factorise(const SparseMatrix& A) {
     // (40), else the simplicial LL'. A row count threshold (simplicial below 15,000 rows) had
     // been measured while CHOLMOD's OpenMP threads spun on this 2-core machine: with them
     // serial, the supernodal factorisation took the default scene's first 20 frames' solve from
-    // 8.3 to 2.3 s, the hanging cloth's (625 vertices) from 0.68 to 0.25 s. A factor reused
+    // 8.26 to 2.17 s, the hanging cloth's (625 vertices) from 0.68 to 0.24 s. A factor reused
     // for many solves stays simplicial: its triangular solves with three right-hand sides are
-    // the faster ones (docs/solvers.md).
-    f.llt.setMode(Eigen::CholmodSimplicialLLt);
-    if (use_ == Use::Refactorised) {
-      f.llt.setMode(Eigen::CholmodAuto);
-      f.llt.analyzePattern(A);
-      const cholmod_common& c = f.llt.cholmod();
-      if (c.lnz > 0 && c.fl / c.lnz >= c.supernodal_switch) f.llt.setMode(Eigen::CholmodSupernodalLLt);
-      else f.llt.setMode(Eigen::CholmodSimplicialLLt);
-    }
+    // the faster ones (docs/solvers.md). CHOLMOD's analysis in its automatic mode takes that
+    // rule; a simplicial pick is analysed again as LL' (automatic mode would factorise LDL').
+    f.llt.setMode(use_ == Use::Refactorised ? Eigen::CholmodAuto : Eigen::CholmodSimplicialLLt);
     f.llt.analyzePattern(A);
+    const cholmod_common& c = f.llt.cholmod();
+    if (use_ == Use::Refactorised && !(c.lnz > 0 && c.fl / c.lnz >= c.supernodal_switch)) {
+      f.llt.setMode(Eigen::CholmodSimplicialLLt);
+      f.llt.analyzePattern(A);
+    }
     ++f.analyses;
     f.remember_pattern(A);
   }

@@ -106,6 +106,7 @@ Scalar heavy_elastica_drop(Scalar length, Scalar load_over_rigidity) {
     throw std::invalid_argument("expected a finite positive length and a finite load over rigidity of 0 or more");
   constexpr int ELASTICA_STAGES = 100, NEWTON_ITERATIONS = 50;
   constexpr Scalar NEWTON_STEP = 1e-13;  // rad: the largest change that ends the iteration
+  constexpr Scalar UNCONVERGED = 1e-9;   // rad: a last change this large after every iteration
   const int n = ELASTICA_INTERVALS;      // theta_0 = 0 is fixed, theta_1 .. theta_n unknown
   const Scalar h = length / n;
   std::vector<Scalar> theta(n + 1, 0.0), lower(n + 1), diagonal(n + 1), upper(n + 1), residual(n + 1);
@@ -136,6 +137,10 @@ Scalar heavy_elastica_drop(Scalar length, Scalar load_over_rigidity) {
         largest = std::max(largest, std::abs(delta));
       }
       if (largest < NEWTON_STEP) break;
+      // Rounding may stall the last steps above NEWTON_STEP; a step above UNCONVERGED is not rounding.
+      if (iteration + 1 == NEWTON_ITERATIONS && largest > UNCONVERGED)
+        throw std::invalid_argument("the heavy elastica did not converge (length " + std::to_string(length) +
+                                    " m, load over rigidity " + std::to_string(load_over_rigidity) + " 1/m^3)");
     }
   }
   Scalar drop = 0;
@@ -145,14 +150,22 @@ Scalar heavy_elastica_drop(Scalar length, Scalar load_over_rigidity) {
 
 Scalar elastica_bending_length(Scalar length, Scalar drop) {
   if (!(std::isfinite(length) && length > 0 && std::isfinite(drop) && drop > 0))
-    throw std::invalid_argument("expected a finite positive length and a tip that dropped");
+    throw std::invalid_argument("expected a finite positive length and a tip that dropped (length " + std::to_string(length) +
+                                " m, drop " + std::to_string(drop) + " m)");
   const auto drop_for = [&](Scalar c) { return heavy_elastica_drop(length, 1 / (c * c * c)); };
   // The shortest bending length told apart, and the longest: a heavy elastica drops less than
-  // the linear beam's L^4 / (8 c^3), so the beam's c for this drop drops at most this much.
-  Scalar lo = length / MAX_OVERHANG_OVER_BENDING_LENGTH, hi = std::cbrt(std::pow(length, 4) / (8 * drop));
-  if (!(drop < drop_for(lo)))
-    throw std::invalid_argument("the tip hangs too nearly straight down to tell a bending length (under the overhang over " +
-                                std::to_string(int(MAX_OVERHANG_OVER_BENDING_LENGTH)) + ")");
+  // the linear beam's L^4 / (8 c^3), so the beam's c for this drop drops at most this much
+  // (capped where the drop is too small to tell: a millionth of the length).
+  const Scalar lo0 = length / MAX_OVERHANG_OVER_BENDING_LENGTH, shortest_drop = drop_for(lo0);
+  if (!(drop < shortest_drop))
+    throw std::invalid_argument("a drop of " + std::to_string(drop) + " m from a clamped length of " + std::to_string(length) +
+                                " m is more than a strip of bending length 1/" +
+                                std::to_string(int(MAX_OVERHANG_OVER_BENDING_LENGTH)) + " of it drops (" +
+                                std::to_string(shortest_drop) + " m): too nearly straight down to tell a bending length");
+  if (!(drop > MIN_DROP_OVER_LENGTH * length))
+    throw std::invalid_argument("a drop of " + std::to_string(drop) + " m from a clamped length of " + std::to_string(length) +
+                                " m is too small to tell a bending length");
+  Scalar lo = lo0, hi = std::cbrt(std::pow(length, 4) / (8 * drop));
   if (hi <= lo) return lo;
   while (hi / lo - 1 > BENDING_LENGTH_TOLERANCE) {
     const Scalar mid = std::sqrt(lo * hi);
@@ -176,7 +189,10 @@ CantileverResult measure_cantilever(const std::vector<Vec3>& initial, const std:
   if (free_count == 0) throw std::invalid_argument("expected free vertices beyond the clamp");
   Vec3 along = free / free_count - clamp / held_count;
   along -= along.dot(g) * g;
-  if (!(along.norm() > 0)) throw std::invalid_argument("expected the free vertices beside the clamp, across gravity");
+  Scalar extent = 0;  // the strip's size, against which the free part's offset must tell a direction
+  for (const Vec3& x : initial) extent = std::max(extent, (x - initial.front()).norm());
+  if (!(along.norm() > TIP_BAND * extent))
+    throw std::invalid_argument("expected the free vertices beside the clamp, across gravity (a strip held at one end)");
   along.normalize();
   // Distances along the strip: the clamp's edge, the first free column, the tip.
   Scalar edge = -std::numeric_limits<Scalar>::infinity(), tip = edge;

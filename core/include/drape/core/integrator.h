@@ -34,6 +34,10 @@ struct State {
 /// Everything at rest at the initial positions, time 0.
 State initial_state(const Model& model);
 
+/// Strain limiting: the share of a spring's excess over its limit at a step's start (the
+/// collision response may leave one) that the step takes back (docs/materials.md).
+inline constexpr Scalar STRAIN_RECOVERY = 0.5;
+
 struct StepReport {
   bool ok = true;
   std::string failure;        ///< why the run must stop, when !ok

@@ -124,8 +124,6 @@ struct Box {
   bool contains(const Vec3& x) const { return (x.array() >= min.array()).all() && (x.array() <= max.array()).all(); }
 };
 
-/// Pinned vertices of one cloth, chosen by index, by grid corner name or by a box around their
-/// initial positions; they follow motion when given, else stay put.
 /// A ball: the vertices whose initial positions lie within `radius` of `center`.
 struct Ball {
   Vec3 center = Vec3::Zero();
@@ -133,6 +131,8 @@ struct Ball {
   bool contains(const Vec3& x) const { return (x - center).norm() <= radius; }
 };
 
+/// Pinned vertices of one cloth, chosen by index, by grid corner name, or by a box or a ball
+/// around their initial positions; they follow motion when given, else stay put.
 struct HandleSpec {
   int cloth = 0;
   std::vector<int> nodes;

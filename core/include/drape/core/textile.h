@@ -60,11 +60,14 @@ inline constexpr int ELASTICA_INTERVALS = 4000;
 
 /// The bending length c (m) of a heavy elastica of this length whose tip drops by `drop`: the
 /// inverse of heavy_elastica_drop, by bisection on log c to a relative BENDING_LENGTH_TOLERANCE.
-/// Throws std::invalid_argument unless 0 < drop < the drop of a strip of bending length
-/// length / MAX_OVERHANG_OVER_BENDING_LENGTH (all but hanging straight down).
+/// Throws std::invalid_argument unless MIN_DROP_OVER_LENGTH times the length < drop < the drop
+/// of a strip of bending length length / MAX_OVERHANG_OVER_BENDING_LENGTH (all but hanging
+/// straight down), or when the elastica's Newton iteration does not converge.
 Scalar elastica_bending_length(Scalar length, Scalar drop);
 
 inline constexpr Scalar BENDING_LENGTH_TOLERANCE = 1e-6;
+/// Drops under this fraction of the length are too small to tell a bending length from.
+inline constexpr Scalar MIN_DROP_OVER_LENGTH = 1e-6;
 /// Overhangs longer than this many bending lengths hang so nearly straight down (drop 0.9934 of
 /// the overhang at 20) that the drop no longer tells the bending length; the solver's
 /// continuation also fails beyond about 25.
