@@ -71,6 +71,12 @@ int measure_cantilever_test(const MeasureArguments& args, const Model& model, in
     std::cerr << "drape measure: " << args.folder << ": expected one cloth (the strip), found " << model.cloths.size() << "\n";
     return EXIT_BAD_INPUT;
   }
+  const Material& material = model.scene.cloths.front().material;
+  const Scalar weight = material.density * model.scene.gravity.norm();  // N/m^2
+  if (!(weight > 0)) {
+    std::cerr << "drape measure: " << args.folder << ": expected gravity (the strip bends under its own weight)\n";
+    return EXIT_BAD_INPUT;
+  }
   std::vector<bool> held(model.vertex_count());
   for (std::size_t v = 0; v < held.size(); ++v) held[v] = model.pin_of_vertex[v] >= 0;
   CantileverResult r;
@@ -80,12 +86,6 @@ int measure_cantilever_test(const MeasureArguments& args, const Model& model, in
     measured = elastica_bending_length(r.clamped_length(), r.drop);
   } catch (const std::invalid_argument& e) {
     std::cerr << "drape measure: " << args.folder << ", frame " << frame << ": " << e.what() << "\n";
-    return EXIT_BAD_INPUT;
-  }
-  const Material& material = model.scene.cloths.front().material;
-  const Scalar weight = material.density * model.scene.gravity.norm();  // N/m^2
-  if (!(weight > 0)) {
-    std::cerr << "drape measure: " << args.folder << ": expected gravity (the strip bends under its own weight)\n";
     return EXIT_BAD_INPUT;
   }
   const Scalar rigidity = material.bending_rigidity;                      // N m, 0 for bending springs

@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # The textile laboratory's two tests on every fabric preset (issue 20; docs/materials.md):
-# - the Cusick drape test (scenes/cusick_drape.json's geometry) on the 30 cm disc at three
+# - the Cusick drape test (scenes/cusick_drape.json with each preset) on the 30 cm disc at three
 #   resolutions, each about twice the last: 12.5, 6 and 3 mm edges (scenes/meshes/
 #   disc_30cm_12mm.obj, 12 rings, 469 vertices; disc_30cm.obj, 25 rings, 1,951 vertices;
 #   disc_30cm_3mm.obj, 50 rings, 7,651 vertices), each run in full (2 s) with the independent
@@ -23,14 +23,11 @@ PRESETS=${PRESETS:-11oz-black-denim royal-target white-dots-on-blk gray-interloc
 mkdir -p "$OUT"
 failed=0
 
-# The Cusick scene on one disc mesh with one preset.
-cusick_scene() {
-  cat <<JSON
-{"frame_time": 0.033333333333333333, "frame_steps": 10, "frames": 60, "gravity": [0, 0, -9.81],
- "cloths": [{"mesh": "$ROOT/scenes/meshes/$2", "transform": {"translate": [0, 0, 0.32]}, "material": {"preset": "$1"}}],
- "obstacles": [{"mesh": "$ROOT/scenes/meshes/cusick_support.obj"}, {"plane": {"point": [0, 0, 0], "normal": [0, 0, 1]}}],
- "collisions": {"self": true, "obstacles": true}}
-JSON
+# A shipped scene ($1) with another preset ($2) and its meshes' paths made absolute; for the
+# Cusick scene, the disc's mesh is $3.
+scene_with() {
+  sed -E -e "s/\"preset\": \"[a-z0-9-]+\"/\"preset\": \"$2\"/" -e "s|meshes/disc_30cm\.obj|meshes/${3:-disc_30cm.obj}|" \
+    -e "s|\"mesh\": \"meshes/|\"mesh\": \"$ROOT/scenes/meshes/|" "scenes/$1.json"
 }
 
 # "coefficient nodes" of a run's frame.
@@ -47,7 +44,7 @@ for preset in $PRESETS; do
   pen=0
   for mesh in $MESHES; do
     run="$OUT/cusick-$preset-${mesh%.obj}"
-    cusick_scene "$preset" "$mesh" > "$OUT/cusick-$preset-${mesh%.obj}.json"
+    scene_with cusick_drape "$preset" "$mesh" > "$OUT/cusick-$preset-${mesh%.obj}.json"
     start=$(date +%s%N)
     if ! "$DRAPE" run "$OUT/cusick-$preset-${mesh%.obj}.json" --check --quiet --overwrite --out "$run"; then
       echo "$preset on $mesh: the run failed" >&2
@@ -79,8 +76,7 @@ for preset in $PRESETS; do
     fi
   done
   # The cantilever with this preset.
-  sed -E -e "s/\"preset\": \"[a-z0-9-]+\"/\"preset\": \"$preset\"/" -e "s|\"mesh\": \"meshes/|\"mesh\": \"$ROOT/scenes/meshes/|" \
-    scenes/cantilever.json > "$OUT/cantilever-$preset.json"
+  scene_with cantilever "$preset" > "$OUT/cantilever-$preset.json"
   ratio=failed
   if "$DRAPE" run "$OUT/cantilever-$preset.json" --quiet --overwrite --out "$OUT/cantilever-$preset"; then
     ratio=$("$DRAPE" measure cantilever "$OUT/cantilever-$preset" --json | sed -nE 's/.*"drop_over_elastica": ([0-9.]+).*/\1/p')

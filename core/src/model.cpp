@@ -298,22 +298,19 @@ Model build_model(const Scene& scene) {
     }
     if (!handle.corners.empty()) {
       const auto& cloth = scene.cloths[handle.cloth];
-      if (!cloth.grid) fail(scene, path + "/corners", "corner names need a grid cloth; use 'nodes' or 'box' for a mesh");
+      if (!cloth.grid) fail(scene, path + "/corners", "corner names need a grid cloth; use 'nodes', 'box' or 'ball' for a mesh");
       const GridMesh grid = make_grid(*cloth.grid);
       for (const std::string& name : handle.corners) chosen.push_back(range.first_vertex + *grid_corner(grid, name));
     }
-    if (handle.box) {
+    // The cloth's vertices whose initial positions a region (a box or a ball) holds.
+    const auto choose_inside = [&](const auto& region, const std::string& key) {
       std::size_t found = 0;
       for (int v = range.first_vertex; v < range.first_vertex + range.vertex_count; ++v)
-        if (handle.box->contains(model.initial_positions[v])) chosen.push_back(v), ++found;
-      if (found == 0) fail(scene, path + "/box", "the box holds no vertex of cloth " + std::to_string(handle.cloth));
-    }
-    if (handle.ball) {
-      std::size_t found = 0;
-      for (int v = range.first_vertex; v < range.first_vertex + range.vertex_count; ++v)
-        if (handle.ball->contains(model.initial_positions[v])) chosen.push_back(v), ++found;
-      if (found == 0) fail(scene, path + "/ball", "the ball holds no vertex of cloth " + std::to_string(handle.cloth));
-    }
+        if (region.contains(model.initial_positions[v])) chosen.push_back(v), ++found;
+      if (found == 0) fail(scene, path + "/" + key, "the " + key + " holds no vertex of cloth " + std::to_string(handle.cloth));
+    };
+    if (handle.box) choose_inside(*handle.box, "box");
+    if (handle.ball) choose_inside(*handle.ball, "ball");
     for (int v : chosen) {
       model.initial_velocities[v] = handle.motion.velocity_at(model.initial_positions[v], 0);
       if (model.pin_of_vertex[v] >= 0) continue;  // already pinned by an earlier handle

@@ -184,6 +184,11 @@ Box read_box(const Node& n) {
   return b;
 }
 
+Ball read_ball(const Node& n) {  // a sphere obstacle's or a handle's {center, radius}
+  n.allow({"center", "radius"});
+  return {n.at("center").vec3_within(MAX_COORDINATE, "m"), n.at("radius").number_in(MIN_LENGTH, MAX_SIZE, "from 1e-6 to 1e4 (m)")};
+}
+
 // A render section (the scene's or a cloth's), kept as text: the renderer reads it.
 std::string render_section(const Node& r) {
   if (!r.raw().is_object()) r.fail("expected an object");
@@ -275,10 +280,7 @@ HandleSpec read_handle(const Node& n, std::size_t cloth_count) {
     for (const Node& c : n.at("corners").array(1))
       h.corners.push_back(c.one_of({"bottom-left", "bottom-right", "top-left", "top-right"}));
   if (n.has("box")) h.box = read_box(n.at("box"));
-  if (n.has("ball")) n.at("ball").allow({"center", "radius"});
-  if (n.has("ball"))
-    h.ball = Ball{n.at("ball").at("center").vec3_within(MAX_COORDINATE, "m"),
-                  n.at("ball").at("radius").number_in(MIN_LENGTH, MAX_SIZE, "from 1e-6 to 1e4 (m)")};
+  if (n.has("ball")) h.ball = read_ball(n.at("ball"));
   if (h.nodes.empty() && h.corners.empty() && !h.box && !h.ball)
     n.fail("expected 'nodes', 'corners', 'box' or 'ball' to choose the pinned vertices");
   if (n.has("motion")) h.motion = read_motion(n.at("motion"));
@@ -291,11 +293,9 @@ ObstacleSpec read_obstacle(const Node& n) {
   const int kinds = n.has("sphere") + n.has("plane") + n.has("mesh");
   if (kinds != 1) n.fail("expected exactly one of 'sphere', 'plane' or 'mesh'");
   if (n.has("sphere")) {
-    const Node s = n.at("sphere");
-    s.allow({"center", "radius"});
+    const Ball ball = read_ball(n.at("sphere"));
     o.kind = ObstacleSpec::Kind::Sphere;
-    o.center = s.at("center").vec3_within(MAX_COORDINATE, "m");
-    o.radius = s.at("radius").number_in(MIN_LENGTH, MAX_SIZE, "from 1e-6 to 1e4 (m)");
+    o.center = ball.center, o.radius = ball.radius;
   } else if (n.has("plane")) {
     const Node p = n.at("plane");
     p.allow({"point", "normal"});

@@ -12,6 +12,7 @@
 #include "drape/core/model.h"
 #include "drape/core/run.h"
 #include "../temp_root.h"
+#include "struck_curtain.h"
 
 using namespace drape;
 namespace fs = std::filesystem;
@@ -186,15 +187,8 @@ TEST(Energy, ARisingSpheresWorkThroughHeldContactsIsCountedInTheBound) {
 // bound: within the scene's warning limit, not within the hundredth the slower strikes keep.
 TEST(Energy, APinnedCurtainStruckByABallStaysOutOfItWithinItsBound) {
   for (const auto& [speed, friction] : {std::pair{2.0, 0.3}, std::pair{4.0, 0.3}, std::pair{8.0, 0.3}, std::pair{8.0, 0.0}}) {
-    const std::string json = R"({"frame_time": 0.033333333333333333, "frame_steps": 10, "frames": 25,
-      "cloths": [{"grid": {"size": [1.0, 1.0], "resolution": [16, 16]},
-                  "transform": {"translate": [0, 0, 1.5], "rotate": [90, 1, 0, 0]},
-                  "material": {"density": 0.15, "stretch": 2000, "shear": 200, "bend": 0.2, "damping": 0.002}}],
-      "handles": [{"cloth": 0, "box": {"min": [-1, -1, 1.99], "max": [1, 1, 2.01]}}],
-      "obstacles": [{"sphere": {"center": [0.05, -0.6, 1.45], "radius": 0.1},
-                     "motion": {"velocity": [0, )" + std::to_string(speed) + R"(, 0], "end": )" +
-                             std::to_string(2.4 / speed) + R"(}}],
-      "friction": )" + std::to_string(friction) + R"(, "collisions": {"self": true, "thickness": 0.005}})";
+    const std::string json =
+        struck_curtain_json(R"({"density": 0.15, "stretch": 2000, "shear": 200, "bend": 0.2, "damping": 0.002})", speed, friction);
     const Model model = build_model(parse_scene(json, "curtain.json"));
     const std::string name = "curtain at " + std::to_string(speed) + " m/s, friction " + std::to_string(friction);
     const Ran ran = run(model, "curtain", 0, true);

@@ -22,12 +22,15 @@ Model model_of(const std::string& json) { return build_model(parse_scene(json, "
 Scalar hinge_energy_per_area(Scalar angle, Scalar edge, Scalar radius) {
   const int n = 30;
   const Scalar row = edge * std::sqrt(3.0) / 2;
-  const auto at = [&](int i, int j) {
-    const Scalar x = i * edge + (j % 2) * edge / 2, y = j * row;
-    const Scalar u = std::cos(angle) * x + std::sin(angle) * y, v = -std::sin(angle) * x + std::cos(angle) * y;
-    return Vec3(radius * std::sin(u / radius), v, radius * (1 - std::cos(u / radius)));
-  };
-  std::vector<std::array<Vec3, 3>> triangles;
+  std::vector<Vec3> x;  // vertex (i, j) at i + n j, bent onto the cylinder
+  for (int j = 0; j < n; ++j)
+    for (int i = 0; i < n; ++i) {
+      const Scalar px = i * edge + (j % 2) * edge / 2, py = j * row;
+      const Scalar u = std::cos(angle) * px + std::sin(angle) * py, v = -std::sin(angle) * px + std::cos(angle) * py;
+      x.emplace_back(radius * std::sin(u / radius), v, radius * (1 - std::cos(u / radius)));
+    }
+  const auto at = [&](int i, int j) { return i + n * j; };
+  std::vector<Triangle> triangles;
   for (int j = 0; j + 1 < n; ++j)
     for (int i = 0; i + 1 < n; ++i)
       if (j % 2 == 0) {
@@ -37,27 +40,26 @@ Scalar hinge_energy_per_area(Scalar angle, Scalar edge, Scalar radius) {
         triangles.push_back({at(i, j), at(i + 1, j + 1), at(i, j + 1)});
         triangles.push_back({at(i, j), at(i + 1, j), at(i + 1, j + 1)});
       }
-  // Interior edges: those two triangles share (matched by their end points' positions).
-  std::map<std::array<Scalar, 6>, std::vector<std::size_t>> edges;
+  // Interior edges: those two triangles share.
+  std::map<std::pair<int, int>, std::vector<std::size_t>> edges;
   for (std::size_t t = 0; t < triangles.size(); ++t)
     for (int k = 0; k < 3; ++k) {
-      Vec3 a = triangles[t][std::size_t(k)], b = triangles[t][std::size_t((k + 1) % 3)];
-      if (std::lexicographical_compare(b.data(), b.data() + 3, a.data(), a.data() + 3)) std::swap(a, b);
-      edges[{a.x(), a.y(), a.z(), b.x(), b.y(), b.z()}].push_back(t);
+      const int a = triangles[t][std::size_t(k)], b = triangles[t][std::size_t((k + 1) % 3)];
+      edges[{std::min(a, b), std::max(a, b)}].push_back(t);
     }
   Scalar energy = 0;
   int interior = 0;
-  for (const auto& [key, pair] : edges) {
+  for (const auto& [ends, pair] : edges) {
     if (pair.size() != 2) continue;
     Vec3 normal[2];
     Scalar area = 0;
     for (int s = 0; s < 2; ++s) {
-      const auto& t = triangles[pair[std::size_t(s)]];
-      const Vec3 cross = (t[1] - t[0]).cross(t[2] - t[0]);
+      const Triangle& t = triangles[pair[std::size_t(s)]];
+      const Vec3 cross = (x[t[1]] - x[t[0]]).cross(x[t[2]] - x[t[0]]);
       area += cross.norm() / 2, normal[s] = cross.normalized();
     }
     const Scalar theta = std::acos(std::clamp(normal[0].dot(normal[1]), Scalar(-1), Scalar(1)));
-    const Scalar length = (Vec3(key[0], key[1], key[2]) - Vec3(key[3], key[4], key[5])).norm();
+    const Scalar length = (x[std::size_t(ends.first)] - x[std::size_t(ends.second)]).norm();
     energy += length * length * theta * theta / (8 * area), ++interior;
   }
   return energy / (interior * std::sqrt(3.0) / 6 * edge * edge);
