@@ -42,6 +42,10 @@ inline constexpr Scalar HELD_GAP = 1.05;
 inline constexpr Scalar STEP_ENERGY_TOLERANCE = 1e-3;
 // Strain limiting's sweeps over the limited springs a step, at most.
 inline constexpr int STRAIN_LIMIT_SWEEPS = 200;
+// A limited spring past (1 + STRAIN_SLACK) times its limit after the response sends the step's
+// motion through the limit and the response again, at most STRAIN_RESPONSE_ROUNDS times.
+inline constexpr Scalar STRAIN_SLACK = 0.002;
+inline constexpr int STRAIN_RESPONSE_ROUNDS = 16;
 
 // The system matrix over the free vertices, with the place of every 3x3 block in its
 // compressed storage: a block (a, b) occupies rows 3a..3a+2 of columns 3b..3b+2, and the three

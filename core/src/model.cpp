@@ -246,8 +246,16 @@ Model build_model(const Scene& scene) {
       else add_springs(model, mesh_edges(mesh), offset, m.stretch, m.damping, SpringKind::Stretch);
       add_springs(model, bending_pairs(mesh), offset, bend_springs, m.damping, SpringKind::Bend);
     }
-    for (std::size_t k = first_spring; k < model.springs.size(); ++k)
+    Scalar diagonal_limit = 0;  // a grid's shear springs' (Material::shear_locking_angle)
+    if (grid && m.shear_locking_angle > 0) {
+      const auto at = [&](int i, int j) { return model.initial_positions[std::size_t(grid->index(i, j) + offset)]; };
+      const Scalar a = (at(1, 0) - at(0, 0)).norm(), b = (at(0, 1) - at(0, 0)).norm();
+      diagonal_limit = m.strain_limit * std::sqrt(1 + 2 * a * b * std::sin(m.shear_locking_angle * M_PI / 180) / (a * a + b * b));
+    }
+    for (std::size_t k = first_spring; k < model.springs.size(); ++k) {
       if (model.springs[k].kind == SpringKind::Stretch) model.springs[k].limit = m.strain_limit;
+      if (model.springs[k].kind == SpringKind::Shear) model.springs[k].limit = diagonal_limit;
+    }
     if (grid) {
       // A grid's quads bend as both of their triangulations do, at half the rigidity each:
       // one triangulation's right triangles give its hinges stencils that mix bending with

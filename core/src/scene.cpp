@@ -1,8 +1,8 @@
 #include "drape/core/scene.h"
 
-#include "drape/core/fabrics.h"
-
 #include "drape/ccd/input_file.h"
+
+#include "scene_node.h"
 
 #include <cmath>
 #include <fstream>
@@ -14,139 +14,17 @@ namespace drape {
 
 namespace {
 
-using json = nlohmann::json;
+using scene_json::describe;
+using scene_json::format_number;
+using scene_json::json;
+using scene_json::Node;
+using scene_json::read_material;
 
 // Bounds that keep counts in an int and a run finite.
 constexpr int MAX_FRAME_STEPS = 100000;
 constexpr int MAX_FRAMES = 10000000;
 // No scene needs more; describing a value nested deeper could overflow the stack.
 constexpr std::size_t MAX_JSON_DEPTH = 64;
-
-std::string format_number(Scalar x) {
-  char text[32];
-  std::snprintf(text, sizeof text, "%g", x);
-  return text;
-}
-
-std::string describe(const json& value) {
-  std::string text = value.dump();
-  if (text.size() > 40) text = text.substr(0, 37) + "...";
-  return text;
-}
-
-// A JSON node with its path in the file, for messages that say where.
-class Node {
- public:
-  Node(const json& value, std::string path, const std::filesystem::path& file)
-      : value_(value), path_(std::move(path)), file_(file) {}
-
-  [[noreturn]] void fail(const std::string& what) const {
-    throw SceneError(file_.string() + ": " + (path_.empty() ? "/" : path_) + ": " + what);
-  }
-  const std::string& path() const { return path_; }
-  const json& raw() const { return value_; }
-
-  // Only these keys (and "comment") may appear.
-  void allow(std::initializer_list<const char*> keys) const {
-    if (!value_.is_object()) fail("expected an object, found " + describe(value_));
-    std::set<std::string> allowed(keys.begin(), keys.end());
-    allowed.insert("comment");
-    for (const auto& [key, v] : value_.items()) {
-      if (allowed.count(key)) continue;
-      std::string list;
-      for (const auto& k : keys) list += std::string(list.empty() ? "" : ", ") + k;
-      Node(v, path_ + "/" + key, file_).fail("unknown key (expected one of: " + list + ")");
-    }
-  }
-  bool has(const char* key) const { return value_.is_object() && value_.contains(key); }
-  Node at(const char* key) const {
-    if (!has(key)) fail(std::string("missing the required key '") + key + "'");
-    return Node(value_.at(key), path_ + "/" + key, file_);
-  }
-  Node at(std::size_t index) const { return Node(value_.at(index), path_ + "/" + std::to_string(index), file_); }
-  std::size_t size() const { return value_.size(); }
-
-  std::vector<Node> array(std::size_t min_size = 0) const {
-    if (!value_.is_array()) fail("expected an array, found " + describe(value_));
-    if (value_.size() < min_size) fail("expected at least " + std::to_string(min_size) + " entries");
-    std::vector<Node> out;
-    for (std::size_t i = 0; i < value_.size(); ++i) out.push_back(at(i));
-    return out;
-  }
-  Scalar number() const {
-    if (!value_.is_number()) fail("expected a number, found " + describe(value_));
-    const Scalar x = value_.get<Scalar>();
-    if (!std::isfinite(x)) fail("expected a finite number");
-    return x;
-  }
-  Scalar number_in(Scalar lo, Scalar hi, const char* range) const {
-    const Scalar x = number();
-    if (!(x >= lo && x <= hi)) fail(std::string("expected a number ") + range + ", found " + describe(value_));
-    return x;
-  }
-  Scalar positive() const {
-    const Scalar x = number();
-    if (!(x > 0)) fail("expected a number > 0, found " + describe(value_));
-    return x;
-  }
-  Scalar non_negative() const { return number_in(0, std::numeric_limits<Scalar>::max(), ">= 0"); }
-  /// A number in (0, most] (or [0, most] with zero allowed), most given with its unit.
-  Scalar up_to(Scalar most, const std::string& unit, bool zero_allowed = false) const {
-    const Scalar x = number();
-    if (!((zero_allowed ? x >= 0 : x > 0) && x <= most))
-      fail(std::string("expected a number ") + (zero_allowed ? ">= 0" : "> 0") + " and at most " + format_number(most) +
-           (unit.empty() ? "" : " " + unit) + ", found " + describe(value_));
-    return x;
-  }
-  int integer_in(int lo, int hi) const {
-    if (!value_.is_number_integer()) fail("expected an integer, found " + describe(value_));
-    const auto x = value_.get<long long>();
-    if (x < lo || x > hi)
-      fail("expected an integer from " + std::to_string(lo) + " to " + std::to_string(hi) + ", found " + describe(value_));
-    return int(x);
-  }
-  bool boolean() const {
-    if (!value_.is_boolean()) fail("expected true or false, found " + describe(value_));
-    return value_.get<bool>();
-  }
-  std::string string() const {
-    if (!value_.is_string()) fail("expected a string, found " + describe(value_));
-    return value_.get<std::string>();
-  }
-  std::string one_of(std::initializer_list<const char*> choices) const {
-    const std::string s = string();
-    std::string list;
-    for (const auto& c : choices) {
-      if (s == c) return s;
-      list += std::string(list.empty() ? "" : ", ") + "'" + c + "'";
-    }
-    fail("expected one of " + list + ", found '" + s + "'");
-  }
-  Vec3 vec3() const {
-    if (!value_.is_array() || value_.size() != 3) fail("expected an array of 3 numbers, found " + describe(value_));
-    return Vec3(at(std::size_t(0)).number(), at(1).number(), at(2).number());
-  }
-  // A vector whose every coordinate is within bound (what the bound is, for the message).
-  Vec3 vec3_within(Scalar bound, const char* unit) const {
-    const Vec3 v = vec3();
-    if (!(v.cwiseAbs().maxCoeff() <= bound))
-      fail("expected coordinates within +-" + format_number(bound) + " " + unit + ", found " + describe(value_));
-    return v;
-  }
-  Vec2 vec2() const {
-    if (!value_.is_array() || value_.size() != 2) fail("expected an array of 2 numbers, found " + describe(value_));
-    return Vec2(at(std::size_t(0)).number(), at(1).number());
-  }
-  std::filesystem::path file_path() const {
-    const std::filesystem::path p = string();
-    return p.is_absolute() ? p : file_.parent_path() / p;
-  }
-
- private:
-  const json& value_;
-  std::string path_;
-  const std::filesystem::path& file_;
-};
 
 Transform read_transform(const Node& n) {
   n.allow({"translate", "rotate", "scale"});
@@ -224,49 +102,7 @@ ClothSpec read_cloth(const Node& n) {
   if (n.has("transform")) c.transform = read_transform(n.at("transform"));
   if (n.has("velocity")) c.velocity = n.at("velocity").vec3_within(MAX_SPEED, "m/s");
   if (n.has("render")) c.render_json = render_section(n.at("render"));
-  if (n.has("material")) {
-    const Node m = n.at("material");
-    m.allow({"preset", "density", "mass_per_area", "stretch", "tensile_stiffness", "shear", "shear_stiffness", "bend",
-             "bending_rigidity", "damping", "air_damping", "strain_limit"});
-    // A preset is a measured fabric in the fabric's keys (fabrics.h); keys beside it override it.
-    const MeasuredFabric* preset = m.has("preset") ? find_measured_fabric(m.at("preset").string()) : nullptr;
-    if (m.has("preset") && !preset)
-      m.at("preset").fail("expected a fabric preset: one of " + measured_fabric_names() + " (docs/materials.md)");
-    if (preset) apply_fabric_preset(*preset, c.grid.has_value(), c.material);
-    // A material is the springs' constants or the fabric's measurements, not a mix: a spring
-    // key beside the fabric's stiffnesses would be silently ignored or (bend springs) stiffen
-    // the sheet by an amount that depends on the resolution.
-    if (m.has("density") && m.has("mass_per_area"))
-      m.at("mass_per_area").fail("expected 'density' (kg/m^2) or 'mass_per_area' (g/m^2), not both");
-    const bool fabric = preset || m.has("tensile_stiffness") || m.has("shear_stiffness");
-    for (const char* spring : {"stretch", "shear", "bend"})
-      if (fabric && m.has(spring))
-        m.at(spring).fail(std::string("expected no '") + spring + "' beside " +
-                          (preset ? "a 'preset'" : "'tensile_stiffness' and 'shear_stiffness' (N/m)") +
-                          ": the fabric's keys set the springs, and its bending is 'bending_rigidity' (N m)");
-    if (!c.grid && m.has("shear_stiffness"))
-      m.at("shear_stiffness").fail("a mesh cloth's springs lie on its edges: its shear stiffness follows from "
-                                   "'tensile_stiffness' (3/8 of it for equilateral triangles); expected that key alone");
-    if (c.grid && fabric && !preset && !(m.has("tensile_stiffness") && m.has("shear_stiffness")))
-      m.at(m.has("tensile_stiffness") ? "tensile_stiffness" : "shear_stiffness")
-          .fail("expected 'tensile_stiffness' and 'shear_stiffness' together (N/m): a grid's springs need both");
-    if (m.has("bend") && m.has("bending_rigidity"))
-      m.at("bending_rigidity").fail("expected one bending model: 'bend' (springs) or 'bending_rigidity' (N m, hinges), not both");
-    if (m.has("density")) c.material.density = m.at("density").up_to(MAX_AREAL_DENSITY, "kg/m^2");
-    if (m.has("mass_per_area")) c.material.density = m.at("mass_per_area").up_to(1000 * MAX_AREAL_DENSITY, "g/m^2") / 1000;
-    if (m.has("tensile_stiffness")) c.material.tensile_stiffness = m.at("tensile_stiffness").up_to(MAX_STIFFNESS, "N/m");
-    if (m.has("shear_stiffness")) c.material.shear_stiffness = m.at("shear_stiffness").up_to(MAX_STIFFNESS, "N/m");
-    if (fabric) c.material.bend = 0;  // bending, if any, from the rigidity
-    if (m.has("stretch")) c.material.stretch = m.at("stretch").up_to(MAX_STIFFNESS, "N", true);
-    if (m.has("shear")) c.material.shear = m.at("shear").up_to(MAX_STIFFNESS, "N", true);
-    if (m.has("bend")) c.material.bend = m.at("bend").up_to(MAX_STIFFNESS, "N", true);
-    if (m.has("bending_rigidity"))  // no bending: `bend` 0
-      c.material.bending_rigidity = m.at("bending_rigidity").up_to(MAX_BENDING_RIGIDITY, "N m");
-    if (m.has("damping")) c.material.damping = m.at("damping").up_to(MAX_DAMPING, "s", true);
-    if (m.has("air_damping")) c.material.air_damping = m.at("air_damping").up_to(MAX_DAMPING, "1/s", true);
-    if (m.has("strain_limit"))
-      c.material.strain_limit = m.at("strain_limit").number_in(MIN_STRAIN_LIMIT, MAX_STRAIN_LIMIT, "from 1.001 to 10");
-  }
+  if (n.has("material")) read_material(n.at("material"), c.grid.has_value(), c.material);
   return c;
 }
 

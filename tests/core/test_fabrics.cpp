@@ -133,3 +133,37 @@ TEST(Fabric, AnUnknownPresetOrASpringKeyBesideOneIsRefused) {
     EXPECT_NE(std::string(e.what()).find("expected no 'bend' beside a 'preset'"), std::string::npos) << e.what();
   }
 }
+
+// A shear locking angle limits a grid's diagonals to the length they reach at that angle with
+// the cell's sides at the strain limit: a 2:1 cell at 30 degrees and 1.05,
+// 1.05 sqrt(1 + 2 * 2 * 1 * 0.5 / 5) = 1.05 sqrt(1.4). The structural springs keep the strain
+// limit; a mesh cloth (no shear springs), a missing strain limit and an angle out of range are
+// refused where they are written.
+TEST(Fabric, AShearLockingAngleLimitsAGridsDiagonals) {
+  const Model model = model_of(R"({"cloths": [{"grid": {"size": [2, 1], "resolution": [4, 4]},
+      "material": {"preset": "royal-target", "strain_limit": 1.05, "shear_locking_angle": 30}}]})");
+  int diagonals = 0;
+  for (const Spring& s : model.springs) {
+    if (s.kind == SpringKind::Shear) {
+      EXPECT_NEAR(s.limit, 1.05 * std::sqrt(1.4), 1e-12);
+      ++diagonals;
+    }
+    if (s.kind == SpringKind::Stretch) EXPECT_EQ(s.limit, 1.05);
+  }
+  EXPECT_EQ(diagonals, 2 * 4 * 4);
+  const auto refused = [](const std::string& cloth, const std::string& expected) {
+    try {
+      model_of(R"({"cloths": [)" + cloth + "]}");
+      ADD_FAILURE() << "no error for " << cloth;
+    } catch (const SceneError& e) {
+      const std::string what = e.what();
+      EXPECT_NE(what.find("/cloths/0/material/shear_locking_angle"), std::string::npos) << what;
+      EXPECT_NE(what.find(expected), std::string::npos) << what;
+    }
+  };
+  refused(R"({"grid": {}, "material": {"strain_limit": 1.1, "shear_locking_angle": 90}})", "at most 89 degrees");
+  refused(R"({"grid": {}, "material": {"shear_locking_angle": 30}})", "expected a 'strain_limit' beside it");
+  refused(R"({"mesh": ")" + std::string(DRAPE_SOURCE_DIR) +
+              R"(/scenes/meshes/disc_30cm_12mm.obj", "material": {"strain_limit": 1.1, "shear_locking_angle": 30}})",
+          "a mesh cloth has no shear springs");
+}

@@ -129,6 +129,9 @@ class Integrator {
   // did through it (J).
   Scalar limit_strain(const std::vector<Vec3>& positions, std::vector<Vec3>& motion, std::vector<Vec3>* also,
                       StepReport& report);
+  // Whether a limited spring (structural, or a diagonal under a shear locking angle) ends the
+  // step (positions + h motion) past its limit by more than STRAIN_SLACK.
+  bool past_limit(const std::vector<Vec3>& positions, const std::vector<Vec3>& motion) const;
   // The linearised system assembled at the state (forces into the workspace) and solved:
   // the state's velocities advanced; false (report says why) when the solve failed.
   bool solve_linearised(State& state, const std::vector<Vec3>& pinned_dv, StepReport& report);

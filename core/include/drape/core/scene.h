@@ -41,6 +41,7 @@ inline constexpr Scalar MAX_ACCELERATION = 1e4;   ///< m/s^2: gravity
 inline constexpr Scalar MAX_THICKNESS = 1;        ///< m: collisions.thickness (see also the cloth-size rule in build_model)
 inline constexpr int MAX_PROJECTIVE_ITERATIONS = 1000;  ///< solver.iterations
 inline constexpr Scalar MIN_STRAIN_LIMIT = 1.001, MAX_STRAIN_LIMIT = 10;  ///< material.strain_limit
+inline constexpr Scalar MAX_SHEAR_LOCKING_ANGLE = 89;  ///< material.shear_locking_angle, degrees
 inline constexpr Scalar MAX_CHEBYSHEV_RHO = 0.9999;     ///< solver.chebyshev
 inline constexpr int MAX_PROJECTIVE_HISTORY = 100;        ///< solver.history
 inline constexpr int MAX_FACTOR_REUSE = 1000;             ///< solver.factor_reuse
@@ -107,6 +108,11 @@ struct Material {
   /// The largest stretch the fabric allows (a structural spring's length over its rest
   /// length, above 1), kept by strain limiting after each step's solve; 0: none.
   Scalar strain_limit = 0;
+  /// Degrees: the largest shear angle a grid's fabric allows (its locking angle, where the
+  /// yarns jam), kept by limiting its shear springs (the cells' diagonals) to the length an
+  /// a x b cell's diagonal reaches at that angle with both sides at strain_limit:
+  /// strain_limit sqrt(1 + 2 a b sin(angle) / (a^2 + b^2)); 0: the diagonals are not limited.
+  Scalar shear_locking_angle = 0;
 };
 
 struct ClothSpec {
