@@ -12,7 +12,8 @@
 # Prints one line per preset and exits 1 when a run fails or finds an intersection. Long
 # (about 40 minutes on this 2-core machine, most of it the 3 mm discs): a benchmark, not a test.
 # Usage: bench/textile_runs.sh [BUILD_DIR] [OUT]; PRESETS="royal-target ..." for a subset,
-# MESHES="disc_30cm_12mm.obj disc_30cm.obj" for fewer resolutions.
+# MESHES="disc_30cm_12mm.obj disc_30cm.obj" for fewer resolutions, COMPRESSION=0.01 to give
+# every run's material that `compression` (docs/materials.md; default: the presets' linear springs).
 set -uo pipefail
 cd "$(dirname "$0")/.."
 ROOT=$(pwd)
@@ -26,7 +27,7 @@ failed=0
 # A shipped scene ($1) with another preset ($2) and its meshes' paths made absolute; for the
 # Cusick scene, the disc's mesh is $3.
 scene_with() {
-  sed -E -e "s/\"preset\": \"[a-z0-9-]+\"/\"preset\": \"$2\"/" -e "s|meshes/disc_30cm\.obj|meshes/${3:-disc_30cm.obj}|" \
+  sed -E -e "s/\"preset\": \"[a-z0-9-]+\"/\"preset\": \"$2\"${COMPRESSION:+, \"compression\": $COMPRESSION}/" -e "s|meshes/disc_30cm\.obj|meshes/${3:-disc_30cm.obj}|" \
     -e "s|\"mesh\": \"meshes/|\"mesh\": \"$ROOT/scenes/meshes/|" "scenes/$1.json"
 }
 
@@ -36,7 +37,7 @@ measure() {
 }
 
 MESHES=${MESHES:-disc_30cm_12mm.obj disc_30cm.obj disc_30cm_3mm.obj}
-printf "%-19s | %s | %-8s | %-6s | %-11s | %s\n" preset "Cusick per mesh ($MESHES): DC (at frame 40) nodes, seconds" \
+printf "%-19s | %s | %-8s | %-6s | %-11s | %s\n" preset "Cusick per mesh ($MESHES; compression ${COMPRESSION:-1}): DC (at frame 40) nodes, seconds" \
   "DC changes" "pen" "cantilever" "published DC, nodes"
 for preset in $PRESETS; do
   cells=()

@@ -21,7 +21,7 @@ void Integrator::assemble(const std::vector<Vec3>& x, const std::vector<Vec3>& v
       w.add_block(w.diagonal[w.free_index[k]], m.masses[k] * (1 + h * m.air_damping[k]) * Mat3::Identity());
   for (std::size_t k = 0; k < m.springs.size(); ++k) {
     const Spring& s = m.springs[k];
-    const SpringEvaluation e = evaluate_spring(x[s.i], x[s.j], v[s.i], v[s.j], s.rest_length, s.stiffness, s.damping);
+    const SpringEvaluation e = evaluate_spring(x[s.i], x[s.j], v[s.i], v[s.j], s.rest_length, s.stiffness, s.damping, s.compression);
     forces[s.i] += e.force;
     forces[s.j] -= e.force;
     if (stiffness_times_v) {

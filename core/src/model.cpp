@@ -201,6 +201,11 @@ Model build_model(const Scene& scene) {
   for (std::size_t c = 0; c < scene.cloths.size(); ++c) {
     const ClothSpec& spec = scene.cloths[c];
     const std::string path = "/cloths/" + std::to_string(c);
+    // The projective solver's springs are fixed-weight constraints: one constant both ways.
+    if (spec.material.compression < 1 && scene.solver.kind == SolverKind::Projective)
+      fail(scene, path + "/material/compression",
+           "the projective solver's springs resist compression as they resist stretching; expected the cholmod or "
+           "cg solver for a 'compression' below 1");
     std::optional<GridMesh> grid;
     TriangleMesh mesh;
     if (spec.grid) {
@@ -255,6 +260,7 @@ Model build_model(const Scene& scene) {
     for (std::size_t k = first_spring; k < model.springs.size(); ++k) {
       if (model.springs[k].kind == SpringKind::Stretch) model.springs[k].limit = m.strain_limit;
       if (model.springs[k].kind == SpringKind::Shear) model.springs[k].limit = diagonal_limit;
+      model.springs[k].compression = m.compression;
     }
     if (grid) {
       // A grid's quads bend as both of their triangulations do, at half the rigidity each:

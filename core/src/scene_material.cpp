@@ -6,7 +6,8 @@ namespace drape::scene_json {
 
 void read_material(const Node& m, bool grid, Material& material) {
   m.allow({"preset", "density", "mass_per_area", "stretch", "tensile_stiffness", "shear", "shear_stiffness", "bend",
-           "bending_rigidity", "damping", "air_damping", "strain_limit", "shear_locking_angle"});
+           "bending_rigidity", "damping", "air_damping", "strain_limit", "shear_locking_angle",
+         "compression"});
   // A preset is a measured fabric in the fabric's keys (fabrics.h); keys beside it override it.
   const MeasuredFabric* preset = m.has("preset") ? find_measured_fabric(m.at("preset").string()) : nullptr;
   if (m.has("preset") && !preset)
@@ -55,6 +56,7 @@ void read_material(const Node& m, bool grid, Material& material) {
                  "the cell's sides at the strain limit");
     material.shear_locking_angle = angle.up_to(MAX_SHEAR_LOCKING_ANGLE, "degrees");
   }
+  if (m.has("compression")) material.compression = m.at("compression").number_in(0, 1, "from 0 to 1");
 }
 
 }  // namespace drape::scene_json

@@ -167,3 +167,26 @@ TEST(Fabric, AShearLockingAngleLimitsAGridsDiagonals) {
               R"(/scenes/meshes/disc_30cm_12mm.obj", "material": {"strain_limit": 1.1, "shear_locking_angle": 30}})",
           "a mesh cloth has no shear springs");
 }
+
+// A material's `compression` reaches every spring of its cloth (the bending springs too), and
+// is refused out of [0, 1] or with the projective solver, whose springs are fixed-weight
+// constraints, where it is written.
+TEST(Fabric, ACompressionReachesEverySpringAndIsRefusedWhereItCannotHold) {
+  const Model model = model_of(R"({"cloths": [{"grid": {"resolution": [4, 4]}, "material": {"compression": 0.1}},
+                                             {"grid": {"resolution": [2, 2]}}]})");
+  for (const Spring& s : model.springs)
+    EXPECT_EQ(s.compression, s.i < model.cloths[1].first_vertex ? 0.1 : 1.0) << int(s.kind);
+  const auto refused = [](const std::string& scene, const std::string& expected) {
+    try {
+      model_of(scene);
+      ADD_FAILURE() << "no error for " << scene;
+    } catch (const SceneError& e) {
+      const std::string what = e.what();
+      EXPECT_NE(what.find("/cloths/0/material/compression"), std::string::npos) << what;
+      EXPECT_NE(what.find(expected), std::string::npos) << what;
+    }
+  };
+  refused(R"({"cloths": [{"grid": {}, "material": {"compression": 1.5}}]})", "from 0 to 1");
+  refused(R"({"cloths": [{"grid": {}, "material": {"compression": 0.1}}], "solver": {"type": "projective"}})",
+          "expected the cholmod or cg solver");
+}

@@ -62,6 +62,35 @@ TEST(SpringForce, StiffnessMatchesFiniteDifferencesInTension) {
   }
 }
 
+// A material's `compression` c scales the spring's constant in compression only: the energy
+// 1/2 c k (l - L)^2 there (its force still minus its gradient, its Jacobian along the spring
+// c times the linear one's), the linear spring's in tension.
+TEST(SpringForce, ACompressionBelowOneSoftensOnlyACompressedSpring) {
+  std::mt19937_64 rng(4);
+  const Scalar rest = 0.5, k = 80, c = 0.25;
+  for (int trial = 0; trial < 100; ++trial) {
+    const Vec3 xj = random_vec(rng, 1), direction = random_vec(rng, 1).normalized();
+    for (const Scalar ratio : {0.6, 0.95, 1.05, 1.6}) {  // compressed, then stretched
+      const Vec3 xi = xj + direction * rest * ratio;
+      const SpringEvaluation soft = evaluate_spring(xi, xj, Vec3::Zero(), Vec3::Zero(), rest, k, 0, c);
+      const SpringEvaluation linear = evaluate_spring(xi, xj, Vec3::Zero(), Vec3::Zero(), rest, k, 0);
+      const Scalar expected = ratio < 1 ? c : 1;
+      EXPECT_NEAR(soft.energy, expected * linear.energy, 1e-12 * linear.energy) << ratio;
+      EXPECT_LT((soft.force - expected * linear.force).norm(), 1e-12 * linear.force.norm()) << ratio;
+      EXPECT_LT((soft.d_force_d_x - expected * linear.d_force_d_x).norm(), 1e-12 * linear.d_force_d_x.norm()) << ratio;
+      for (int axis = 0; axis < 3; ++axis) {
+        Vec3 plus = xi, minus = xi;
+        plus[axis] += STEP;
+        minus[axis] -= STEP;
+        const Scalar dE = (evaluate_spring(plus, xj, Vec3::Zero(), Vec3::Zero(), rest, k, 0, c).energy -
+                           evaluate_spring(minus, xj, Vec3::Zero(), Vec3::Zero(), rest, k, 0, c).energy) /
+                          (2 * STEP);
+        EXPECT_NEAR(soft.force[axis], -dE, 1e-6 * (1 + std::abs(dE))) << ratio;
+      }
+    }
+  }
+}
+
 TEST(SpringForce, CompressionDropsOnlyTheIndefiniteTerm) {
   // In compression the exact Jacobian is -k [d d^T + (1 - L/l)(I - d d^T)] with (1 - L/l) < 0;
   // drape keeps -k d d^T (Choi and Ko 2002): the difference from finite differences must be
@@ -108,9 +137,10 @@ TEST(SpringForce, DampingJacobianMatchesFiniteDifferences) {
 }
 
 TEST(ModelForces, PotentialEnergyGradientMatchesTheSpringsAndHinges) {
-  // Perturbed grids, with bend springs and with bending hinges: the sum of the springs' and
-  // hinges' forces must be minus the gradient of potential_energy.
-  for (const char* material : {"{}", R"({"bending_rigidity": 0.01})"}) {
+  // Perturbed grids, with bend springs, with bending hinges and with springs soft in
+  // compression: the sum of the springs' and hinges' forces must be minus the gradient of
+  // potential_energy.
+  for (const char* material : {"{}", R"({"bending_rigidity": 0.01})", R"({"compression": 0.2})"}) {
     Scene scene = parse_scene(R"({"cloths": [{"grid": {"size": [1, 1], "resolution": [4, 3]}, "material": )" +
                                   std::string(material) + R"(}], "gravity": [0, 0, 0]})",
                               "inline.json");
@@ -121,7 +151,7 @@ TEST(ModelForces, PotentialEnergyGradientMatchesTheSpringsAndHinges) {
     std::vector<Vec3> force(model.vertex_count(), Vec3::Zero());
     for (const Spring& s : model.springs) {
       const auto e = evaluate_spring(state.positions[s.i], state.positions[s.j], Vec3::Zero(), Vec3::Zero(),
-                                     s.rest_length, s.stiffness, 0);
+                                     s.rest_length, s.stiffness, 0, s.compression);
       force[s.i] += e.force;
       force[s.j] -= e.force;
     }

@@ -27,7 +27,8 @@ struct SpringEvaluation {
 /// as in Choi and Ko, "Stable but responsive cloth" (SIGGRAPH 2002, section 5), that term is
 /// dropped when l < L, which keeps the matrix symmetric positive definite. In tension the
 /// Jacobian is exact. The damping force's dependence on x is neglected (Baraff and Witkin 1998).
+/// In compression the constant is compression k (Material::compression; 1: a linear spring).
 SpringEvaluation evaluate_spring(const Vec3& xi, const Vec3& xj, const Vec3& vi, const Vec3& vj, Scalar rest_length,
-                                 Scalar stiffness, Scalar damping);
+                                 Scalar stiffness, Scalar damping, Scalar compression = 1);
 
 }  // namespace drape

@@ -25,6 +25,7 @@ struct Spring {
   Scalar damping = 0;     ///< N s/m
   SpringKind kind = SpringKind::Stretch;
   Scalar limit = 0;       ///< largest length over rest length that strain limiting allows (0: none)
+  Scalar compression = 1; ///< its constant in compression over its constant in tension (Material::compression)
 };
 
 /// One hinge of the quadratic bending model (Bergou, Wardetzky, Harmon, Zorin and Grinspun, "A

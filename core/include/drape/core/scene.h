@@ -113,6 +113,10 @@ struct Material {
   /// a x b cell's diagonal reaches at that angle with both sides at strain_limit:
   /// strain_limit sqrt(1 + 2 a b sin(angle) / (a^2 + b^2)); 0: the diagonals are not limited.
   Scalar shear_locking_angle = 0;
+  /// The springs' constant in compression over their constant in tension, from 0 to 1: woven
+  /// and knitted fabrics barely resist in-plane compression (they buckle at the yarns' scale),
+  /// where a linear spring (1) resists it as it resists stretching. The cholmod and cg solvers.
+  Scalar compression = 1;
 };
 
 struct ClothSpec {
