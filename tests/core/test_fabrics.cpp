@@ -15,6 +15,18 @@ namespace {
 
 Model model_of(const std::string& json) { return build_model(parse_scene(json, "inline.json")); }
 
+// A scene that building refuses, with the JSON path and the expectation in its message.
+void expect_refused(const std::string& scene, const std::string& path, const std::string& expected) {
+  try {
+    model_of(scene);
+    ADD_FAILURE() << "no error for " << scene;
+  } catch (const SceneError& e) {
+    const std::string what = e.what();
+    EXPECT_NE(what.find(path), std::string::npos) << what;
+    EXPECT_NE(what.find(expected), std::string::npos) << what;
+  }
+}
+
 // The simulator's hinge energy (fabrics.h: ke l^2 theta^2 / (8 (A0 + A1)), ke = 1) of a patch
 // of equilateral triangles with edges of `edge` m bent onto a cylinder of radius `radius` across
 // the direction at `angle` to the rows, per square metre of its interior edges' share of the
@@ -152,14 +164,7 @@ TEST(Fabric, AShearLockingAngleLimitsAGridsDiagonals) {
   }
   EXPECT_EQ(diagonals, 2 * 4 * 4);
   const auto refused = [](const std::string& cloth, const std::string& expected) {
-    try {
-      model_of(R"({"cloths": [)" + cloth + "]}");
-      ADD_FAILURE() << "no error for " << cloth;
-    } catch (const SceneError& e) {
-      const std::string what = e.what();
-      EXPECT_NE(what.find("/cloths/0/material/shear_locking_angle"), std::string::npos) << what;
-      EXPECT_NE(what.find(expected), std::string::npos) << what;
-    }
+    expect_refused(R"({"cloths": [)" + cloth + "]}", "/cloths/0/material/shear_locking_angle", expected);
   };
   refused(R"({"grid": {}, "material": {"strain_limit": 1.1, "shear_locking_angle": 90}})", "at most 89 degrees");
   refused(R"({"grid": {}, "material": {"shear_locking_angle": 30}})", "expected a 'strain_limit' beside it");
@@ -177,14 +182,7 @@ TEST(Fabric, ACompressionReachesEverySpringAndIsRefusedWhereItCannotHold) {
   for (const Spring& s : model.springs)
     EXPECT_EQ(s.compression, s.i < model.cloths[1].first_vertex ? 0.1 : 1.0) << int(s.kind);
   const auto refused = [](const std::string& scene, const std::string& expected) {
-    try {
-      model_of(scene);
-      ADD_FAILURE() << "no error for " << scene;
-    } catch (const SceneError& e) {
-      const std::string what = e.what();
-      EXPECT_NE(what.find("/cloths/0/material/compression"), std::string::npos) << what;
-      EXPECT_NE(what.find(expected), std::string::npos) << what;
-    }
+    expect_refused(scene, "/cloths/0/material/compression", expected);
   };
   refused(R"({"cloths": [{"grid": {}, "material": {"compression": 1.5}}]})", "from 0 to 1");
   refused(R"({"cloths": [{"grid": {}, "material": {"compression": 0.1}}], "solver": {"type": "projective"}})",
