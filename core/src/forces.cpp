@@ -11,7 +11,7 @@ SpringEvaluation evaluate_spring(const Vec3& xi, const Vec3& xj, const Vec3& vi,
   if (!(length > 0)) return out;  // coincident particles: no direction, no force
   const Vec3 d = delta / length;
   const Scalar stretch = length - rest_length;
-  if (stretch < 0) stiffness *= compression;
+  stiffness = spring_constant(stiffness, stretch, compression);
   const Mat3 ddT = d * d.transpose();
   out.energy = 0.5 * stiffness * stretch * stretch;
   out.force = -stiffness * stretch * d - damping * (vi - vj).dot(d) * d;

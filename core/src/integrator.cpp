@@ -447,7 +447,7 @@ Scalar potential_energy(const Model& model, const State& state) {
   Scalar e = 0;
   for (const Spring& s : model.springs) {
     const Scalar stretch = (state.positions[s.i] - state.positions[s.j]).norm() - s.rest_length;
-    e += 0.5 * s.stiffness * (stretch < 0 ? s.compression : 1) * stretch * stretch;
+    e += 0.5 * spring_constant(s.stiffness, stretch, s.compression) * stretch * stretch;
   }
   for (const Hinge& hinge : model.hinges) e += 0.5 * hinge_vector(hinge, state.positions).squaredNorm();
   for (std::size_t v = 0; v < state.positions.size(); ++v) e -= model.masses[v] * model.scene.gravity.dot(state.positions[v]);

@@ -8,6 +8,7 @@
 #include <fstream>
 #include <map>
 #include <sstream>
+#include <utility>
 
 #include "drape/core/mesh_io.h"
 
@@ -49,6 +50,12 @@ void add_springs(Model& model, const std::vector<Edge>& edges, int offset, Scala
   add_edge_springs(model, edges, offset, damping_time, kind, [&](std::size_t, Scalar rest) { return stiffness / rest; });
 }
 
+// The sides a (along x) and b of a grid's cells, from its placed vertices (offset: its first).
+std::pair<Scalar, Scalar> cell_sides(const Model& model, const GridMesh& grid, int offset) {
+  const auto at = [&](int i, int j) { return model.initial_positions[std::size_t(grid.index(i, j) + offset)]; };
+  return {(at(1, 0) - at(0, 0)).norm(), (at(0, 1) - at(0, 0)).norm()};
+}
+
 // The springs of a fabric's tensile stiffness T and shear stiffness G (N/m) on a grid of a x b
 // cells: axis springs kx (along a) and ky, and both diagonals kd, whose network has the
 // stiffness C11 = kx a / b + G a^2 / b^2, C22 = ky b / a + G b^2 / a^2, C12 = C66 = 2 kd a b / d^2
@@ -59,8 +66,8 @@ void add_springs(Model& model, const std::vector<Edge>& edges, int offset, Scala
 void add_fabric_grid_springs(Model& model, const GridMesh& grid, const GridSprings& springs, int offset,
                              const Material& m, const Scene& scene, const std::string& path) {
   const int columns = grid.spec.resolution[0] + 1, ny = grid.spec.resolution[1];
-  const auto at = [&](int i, int j) { return model.initial_positions[std::size_t(grid.index(i, j) + offset)]; };
-  const Scalar a = (at(1, 0) - at(0, 0)).norm(), b = (at(0, 1) - at(0, 0)).norm(), d2 = a * a + b * b;
+  const auto [a, b] = cell_sides(model, grid, offset);
+  const Scalar d2 = a * a + b * b;
   const Scalar T = m.tensile_stiffness, G = m.shear_stiffness;
   const Scalar s = 0.5 * (T + std::hypot(T, 2 * G));
   const Scalar kx = s * b / a - G * a / b, ky = s * a / b - G * b / a, kd = G * d2 / (2 * a * b);
@@ -253,8 +260,7 @@ Model build_model(const Scene& scene) {
     }
     Scalar diagonal_limit = 0;  // a grid's shear springs' (Material::shear_locking_angle)
     if (grid && m.shear_locking_angle > 0) {
-      const auto at = [&](int i, int j) { return model.initial_positions[std::size_t(grid->index(i, j) + offset)]; };
-      const Scalar a = (at(1, 0) - at(0, 0)).norm(), b = (at(0, 1) - at(0, 0)).norm();
+      const auto [a, b] = cell_sides(model, *grid, offset);
       diagonal_limit = m.strain_limit * std::sqrt(1 + 2 * a * b * std::sin(m.shear_locking_angle * M_PI / 180) / (a * a + b * b));
     }
     for (std::size_t k = first_spring; k < model.springs.size(); ++k) {

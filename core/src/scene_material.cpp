@@ -7,7 +7,7 @@ namespace drape::scene_json {
 void read_material(const Node& m, bool grid, Material& material) {
   m.allow({"preset", "density", "mass_per_area", "stretch", "tensile_stiffness", "shear", "shear_stiffness", "bend",
            "bending_rigidity", "damping", "air_damping", "strain_limit", "shear_locking_angle",
-         "compression"});
+           "compression"});
   // A preset is a measured fabric in the fabric's keys (fabrics.h); keys beside it override it.
   const MeasuredFabric* preset = m.has("preset") ? find_measured_fabric(m.at("preset").string()) : nullptr;
   if (m.has("preset") && !preset)

@@ -160,7 +160,9 @@ TEST(Fabric, AShearLockingAngleLimitsAGridsDiagonals) {
       EXPECT_NEAR(s.limit, 1.05 * std::sqrt(1.4), 1e-12);
       ++diagonals;
     }
-    if (s.kind == SpringKind::Stretch) EXPECT_EQ(s.limit, 1.05);
+    if (s.kind == SpringKind::Stretch) {
+      EXPECT_EQ(s.limit, 1.05);
+    }
   }
   EXPECT_EQ(diagonals, 2 * 4 * 4);
   const auto refused = [](const std::string& cloth, const std::string& expected) {

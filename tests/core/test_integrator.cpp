@@ -302,7 +302,9 @@ TEST(Integrator, StrainLimitingHoldsAStruckCurtainWithinTheLimitEveryStep) {
     EXPECT_LE(over_limit, 1.01) << material << " at " << speed << " m/s";
     EXPECT_LE(shear_over_limit, 1.01) << material << " at " << speed << " m/s";
     EXPECT_GT(largest, 1.01) << material << " at " << speed << " m/s";  // struck hard enough to stretch
-    if (material == locked) EXPECT_GT(shear_over_limit, 0.99) << speed << " m/s";  // sheared to the limit
+    if (material == locked) {
+      EXPECT_GT(shear_over_limit, 0.99) << speed << " m/s";  // sheared to the limit
+    }
   }
 }
 

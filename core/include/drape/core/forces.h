@@ -31,4 +31,9 @@ struct SpringEvaluation {
 SpringEvaluation evaluate_spring(const Vec3& xi, const Vec3& xj, const Vec3& vi, const Vec3& vj, Scalar rest_length,
                                  Scalar stiffness, Scalar damping, Scalar compression = 1);
 
+/// A spring's constant at a stretch (length - rest length): compression k when compressed.
+inline Scalar spring_constant(Scalar stiffness, Scalar stretch, Scalar compression) {
+  return stretch < 0 ? stiffness * compression : stiffness;
+}
+
 }  // namespace drape
