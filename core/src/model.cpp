@@ -109,24 +109,65 @@ void add_fabric_mesh_springs(Model& model, const TriangleMesh& mesh, int offset,
 // triangle's right angle at an edge's end), whatever the rounding of a rotated cloth's
 // cotangents (about 1e-16 of them): set to zero so the solvers leave its blocks out.
 constexpr Scalar ZERO_HINGE_WEIGHT = 1e-12;
-// A grid's hinges on its quads' diagonals add only a twist term, which makes a grid bent at
-// 45 degrees to its axes stiffer than along them (1 + share sin^2 2 phi, phi the angle); the
-// axis edges' hinges alone bend alike in every direction but leave the checkerboard of
-// vertices up and down without any stiffness. This share of the rigidity on the diagonals'
-// hinges gives that mode stiffness at 10 % anisotropy.
-constexpr Scalar GRID_DIAGONAL_SHARE = 0.1;
+
+// A hinge's energy over the area it serves, (A1 + A2) / 3, for a bend of unit curvature,
+// averaged over the bend's directions, against the rigidity's B / 2: its two triangles
+// unfolded into a plane (points p_i), a bend z = (d . p)^2 / 2 in direction d gives u = d^T M d
+// with M = sum k_i p_i p_i^T / 2, whose square averages ((a + c) / 2)^2 + (((a - c) / 2)^2 +
+// b^2) / 2 over d for M = [a b; b c]. Returned as {energy, B area}, to be summed.
+std::pair<Scalar, Scalar> hinge_bend_energy(const Hinge& hinge, const std::vector<Vec3>& rest, Scalar rigidity) {
+  const auto x = [&](int i) -> const Vec3& { return rest[std::size_t(hinge.v[std::size_t(i)])]; };
+  const Vec3 e0 = x(1) - x(0);
+  const Scalar length = e0.norm();
+  const Vec3 t = e0 / length;
+  const auto unfolded = [&](int i, Scalar side) {
+    const Vec3 r = x(i) - x(0);
+    return Eigen::Matrix<Scalar, 2, 1>(r.dot(t), side * (r - r.dot(t) * t).norm());
+  };
+  const Eigen::Matrix<Scalar, 2, 1> p[4] = {{0, 0}, {length, 0}, unfolded(2, 1), unfolded(3, -1)};
+  Eigen::Matrix<Scalar, 2, 2> m = Eigen::Matrix<Scalar, 2, 2>::Zero();
+  for (int i = 0; i < 4; ++i) m += 0.5 * hinge.k[std::size_t(i)] * p[i] * p[i].transpose();
+  const Scalar a = m(0, 0), b = m(0, 1), c = m(1, 1);
+  const Scalar squared = 0.25 * (a + c) * (a + c) + 0.5 * (0.25 * (a - c) * (a - c) + b * b);
+  const Scalar areas = 0.5 * (e0.cross(x(2) - x(0)).norm() + e0.cross(x(3) - x(0)).norm());
+  return {0.5 * squared, 0.5 * rigidity * areas / 3};
+}
+
+// Scales the hinges from `first` on so that, around every vertex, a bend stores B c^2 / 2 a
+// square metre averaged over its directions: a vertex's calibration is the energy of the hinges
+// on its edges over what they should store (hinge_bend_energy), a hinge's the mean of its
+// edge's ends', and its weights are divided by the square root of it. An equilateral mesh's
+// calibration is 1; only the triangles' shapes set it, never the bend or the rigidity.
+void calibrate_hinges(Model& model, std::size_t first, Scalar rigidity) {
+  std::map<int, std::pair<Scalar, Scalar>> around;  // vertex: summed {energy, expected}
+  for (std::size_t h = first; h < model.hinges.size(); ++h) {
+    const auto [energy, expected] = hinge_bend_energy(model.hinges[h], model.initial_positions, rigidity);
+    for (int end : {model.hinges[h].v[0], model.hinges[h].v[1]}) {
+      around[end].first += energy;
+      around[end].second += expected;
+    }
+  }
+  for (std::size_t h = first; h < model.hinges.size(); ++h) {
+    Hinge& hinge = model.hinges[h];
+    const auto ratio = [&](int v) { return around[v].first / around[v].second; };
+    const Scalar calibration = 0.5 * (ratio(hinge.v[0]) + ratio(hinge.v[1]));
+    if (!(calibration > 0 && std::isfinite(calibration))) continue;
+    for (Scalar& k : hinge.k) k /= std::sqrt(calibration);
+  }
+}
 
 // The hinges of a cloth's interior edges for bending rigidity B (N m), from its rest positions
 // (Hinge): with e0 = x1 - x0, e1 = x2 - x0, e2 = x3 - x0, e3 = x2 - x1, e4 = x3 - x1 and cot(a, b)
 // the cotangent of the angle between a and b, the weights (cot(-e0, e3) + cot(-e0, e4),
 // cot(e0, e1) + cot(e0, e2), -cot(e0, e1) - cot(-e0, e3), -cot(e0, e2) - cot(-e0, e4)) (Bergou et
-// al. 2006, section 4) times sqrt(B / (A1 + A2)). The factor is this model's calibration: a grid
-// bent into a cylinder stores B c^2 / 2 a square metre away from its ends (Bending tests). On a
-// grid (grid given), the hinges of the quads' diagonals get GRID_DIAGONAL_SHARE of the rigidity.
-void add_hinges(Model& model, const TriangleMesh& mesh, int offset, Scalar rigidity, Scalar damping_time,
-                const GridMesh* grid = nullptr) {
+// al. 2006, section 4) times sqrt(B / (A1 + A2)): on a mesh of equilateral triangles, a bend
+// of curvature c stores B c^2 / 2 a square metre. On other triangles it does not (the Cusick
+// scene's discs, built ring by ring, stored 1.34 and 1.20 times it at 12.5 and 6 mm edges), so
+// each hinge's weights are then divided by the square root of its calibration (hinge_calibration).
+void add_hinges(Model& model, const TriangleMesh& mesh, int offset, Scalar rigidity, Scalar damping_time) {
   if (!(rigidity > 0)) return;  // a scene pays only for what it asks for
   const auto cot = [](const Vec3& a, const Vec3& b) { return a.dot(b) / a.cross(b).norm(); };
+  const std::size_t first = model.hinges.size();
   for (const auto& corners : hinges(mesh)) {
     Hinge hinge;
     for (int i = 0; i < 4; ++i) hinge.v[std::size_t(i)] = corners[std::size_t(i)] + offset;
@@ -134,9 +175,7 @@ void add_hinges(Model& model, const TriangleMesh& mesh, int offset, Scalar rigid
     const Vec3 e0 = x(1) - x(0), e1 = x(2) - x(0), e2 = x(3) - x(0), e3 = x(2) - x(1), e4 = x(3) - x(1);
     const Scalar c01 = cot(e0, e1), c02 = cot(e0, e2), c03 = cot(-e0, e3), c04 = cot(-e0, e4);
     const Scalar areas = 0.5 * (e0.cross(e1).norm() + e0.cross(e2).norm());
-    const int columns = grid ? grid->spec.resolution[0] + 1 : 1;
-    const bool diagonal = grid && corners[0] % columns != corners[1] % columns && corners[0] / columns != corners[1] / columns;
-    const Scalar scale = std::sqrt((diagonal ? GRID_DIAGONAL_SHARE : 1.0) * rigidity / areas);
+    const Scalar scale = std::sqrt(rigidity / areas);
     hinge.k = {scale * (c03 + c04), scale * (c01 + c02), -scale * (c01 + c03), -scale * (c02 + c04)};
     if (!std::all_of(hinge.k.begin(), hinge.k.end(), [](Scalar k) { return std::isfinite(k); })) continue;
     const Scalar largest = std::max({std::abs(hinge.k[0]), std::abs(hinge.k[1]), std::abs(hinge.k[2]), std::abs(hinge.k[3])});
@@ -145,6 +184,43 @@ void add_hinges(Model& model, const TriangleMesh& mesh, int offset, Scalar rigid
     hinge.damping = damping_time;
     model.hinges.push_back(hinge);
   }
+  calibrate_hinges(model, first, rigidity);
+}
+
+// The bending of a grid of a x b cells for rigidity B (N m): the discrete Hessian of its
+// positions, as stencils of the hinges' form (Hinge). Every vertex between two others along
+// its row gets u = (x[i-1] - 2 x[i] + x[i+1]) sqrt(B A) / a^2, A its share of the cloth's area
+// (a b, half of it on the border), and likewise along its column; every cell gets its twist,
+// u = (x00 - x10 - x01 + x11) sqrt(2 B a b) / (a b). Their energy is B (x_uu^2 + x_vv^2 +
+// 2 x_uv^2) / 2 a square metre: B c^2 / 2 for a bend of curvature c in any direction, nothing
+// for an in-plane affine map, and stiffness against every pattern of vertices up and down. The
+// hinges of a grid's right triangles had none against the checkerboard z = w (-1)^(i+j)
+// (docs/materials.md); this gives it four times the stiffness of stripes of the same spacing,
+// as the continuum does. Its stencils join each vertex to the neighbours the bend springs do.
+void add_grid_bending(Model& model, const GridMesh& grid, int offset, Scalar rigidity, Scalar damping_time) {
+  if (!(rigidity > 0)) return;  // a scene pays only for what it asks for
+  const auto [a, b] = cell_sides(model, grid, offset);
+  const int n = grid.spec.resolution[0], m = grid.spec.resolution[1];
+  const auto at = [&](int i, int j) { return grid.index(i, j) + offset; };
+  const auto add = [&](std::array<int, 4> v, std::array<Scalar, 4> k) {
+    Hinge hinge;
+    hinge.v = v;
+    hinge.k = k;
+    hinge.damping = damping_time;
+    model.hinges.push_back(hinge);
+  };
+  // A second difference of step h about vertex c, whose area is A: the stencil's fourth corner unused.
+  const auto second_difference = [&](int before, int c, int after, Scalar h, Scalar area) {
+    const Scalar s = std::sqrt(rigidity * area) / (h * h);
+    add({before, c, after, c}, {s, -2 * s, s, 0});
+  };
+  for (int j = 0; j <= m; ++j)
+    for (int i = 1; i < n; ++i) second_difference(at(i - 1, j), at(i, j), at(i + 1, j), a, a * b * (j == 0 || j == m ? 0.5 : 1));
+  for (int i = 0; i <= n; ++i)
+    for (int j = 1; j < m; ++j) second_difference(at(i, j - 1), at(i, j), at(i, j + 1), b, a * b * (i == 0 || i == n ? 0.5 : 1));
+  const Scalar twist = std::sqrt(2 * rigidity * a * b) / (a * b);
+  for (int j = 0; j < m; ++j)
+    for (int i = 0; i < n; ++i) add({at(i, j), at(i + 1, j), at(i, j + 1), at(i + 1, j + 1)}, {twist, -twist, -twist, twist});
 }
 
 // Memory a run of a scene needs, measured on drape_sphere.json at 64 x 64 and 128 x 128 quads
@@ -268,20 +344,8 @@ Model build_model(const Scene& scene) {
       if (model.springs[k].kind == SpringKind::Shear) model.springs[k].limit = diagonal_limit;
       model.springs[k].compression = m.compression;
     }
-    if (grid) {
-      // A grid's quads bend as both of their triangulations do, at half the rigidity each:
-      // one triangulation's right triangles give its hinges stencils that mix bending with
-      // twist and sample alternate rows, and a cantilever came out 21 % too soft however fine
-      // the grid (docs/materials.md).
-      for (const GridDiagonals diagonals : {GridDiagonals::Forward, GridDiagonals::Backward}) {
-        GridSpec split = *spec.grid;
-        split.diagonals = diagonals;
-        const GridMesh triangulated = make_grid(split);
-        add_hinges(model, triangulated.mesh, offset, m.bending_rigidity / 2, m.damping, &triangulated);
-      }
-    } else {
-      add_hinges(model, mesh, offset, m.bending_rigidity, m.damping);
-    }
+    if (grid) add_grid_bending(model, *grid, offset, m.bending_rigidity, m.damping);
+    else add_hinges(model, mesh, offset, m.bending_rigidity, m.damping);
     model.cloths.push_back(range);
   }
 
