@@ -110,11 +110,11 @@ void add_fabric_mesh_springs(Model& model, const TriangleMesh& mesh, int offset,
 // cotangents (about 1e-16 of them): set to zero so the solvers leave its blocks out.
 constexpr Scalar ZERO_HINGE_WEIGHT = 1e-12;
 
-// A hinge's energy over the area it serves, (A1 + A2) / 3, for a bend of unit curvature,
-// averaged over the bend's directions, against the rigidity's B / 2: its two triangles
-// unfolded into a plane (points p_i), a bend z = (d . p)^2 / 2 in direction d gives u = d^T M d
-// with M = sum k_i p_i p_i^T / 2, whose square averages ((a + c) / 2)^2 + (((a - c) / 2)^2 +
-// b^2) / 2 over d for M = [a b; b c]. Returned as {energy, B area}, to be summed.
+// A hinge's energy for a bend of unit curvature, averaged over the bend's directions, and what
+// a fabric of rigidity B stores over the area the hinge serves, B / 2 times (A1 + A2) / 3: its
+// two triangles unfolded into a plane (points p_i), a bend z = (d . p)^2 / 2 in direction d
+// gives u = d^T M d with M = sum k_i p_i p_i^T / 2, whose square averages ((a + c) / 2)^2 +
+// (((a - c) / 2)^2 + b^2) / 2 over d for M = [a b; b c]. Returned as {energy, expected}.
 std::pair<Scalar, Scalar> hinge_bend_energy(const Hinge& hinge, const std::vector<Vec3>& rest, Scalar rigidity) {
   const auto x = [&](int i) -> const Vec3& { return rest[std::size_t(hinge.v[std::size_t(i)])]; };
   const Vec3 e0 = x(1) - x(0);
@@ -139,17 +139,17 @@ std::pair<Scalar, Scalar> hinge_bend_energy(const Hinge& hinge, const std::vecto
 // edge's ends', and its weights are divided by the square root of it. An equilateral mesh's
 // calibration is 1; only the triangles' shapes set it, never the bend or the rigidity.
 void calibrate_hinges(Model& model, std::size_t first, Scalar rigidity) {
-  std::map<int, std::pair<Scalar, Scalar>> around;  // vertex: summed {energy, expected}
+  std::vector<std::pair<Scalar, Scalar>> around(model.initial_positions.size());  // a vertex's summed {energy, expected}
   for (std::size_t h = first; h < model.hinges.size(); ++h) {
     const auto [energy, expected] = hinge_bend_energy(model.hinges[h], model.initial_positions, rigidity);
     for (int end : {model.hinges[h].v[0], model.hinges[h].v[1]}) {
-      around[end].first += energy;
-      around[end].second += expected;
+      around[std::size_t(end)].first += energy;
+      around[std::size_t(end)].second += expected;
     }
   }
   for (std::size_t h = first; h < model.hinges.size(); ++h) {
     Hinge& hinge = model.hinges[h];
-    const auto ratio = [&](int v) { return around[v].first / around[v].second; };
+    const auto ratio = [&](int v) { return around[std::size_t(v)].first / around[std::size_t(v)].second; };
     const Scalar calibration = 0.5 * (ratio(hinge.v[0]) + ratio(hinge.v[1]));
     if (!(calibration > 0 && std::isfinite(calibration))) continue;
     for (Scalar& k : hinge.k) k /= std::sqrt(calibration);
@@ -162,8 +162,8 @@ void calibrate_hinges(Model& model, std::size_t first, Scalar rigidity) {
 // cot(e0, e1) + cot(e0, e2), -cot(e0, e1) - cot(-e0, e3), -cot(e0, e2) - cot(-e0, e4)) (Bergou et
 // al. 2006, section 4) times sqrt(B / (A1 + A2)): on a mesh of equilateral triangles, a bend
 // of curvature c stores B c^2 / 2 a square metre. On other triangles it does not (the Cusick
-// scene's discs, built ring by ring, stored 1.34 and 1.20 times it at 12.5 and 6 mm edges), so
-// each hinge's weights are then divided by the square root of its calibration (hinge_calibration).
+// scene's discs, built ring by ring, stored 1.30-1.34 and 1.20 times it at 12.5 and 6 mm edges),
+// so each hinge's weights are then divided by the square root of its calibration (calibrate_hinges).
 void add_hinges(Model& model, const TriangleMesh& mesh, int offset, Scalar rigidity, Scalar damping_time) {
   if (!(rigidity > 0)) return;  // a scene pays only for what it asks for
   const auto cot = [](const Vec3& a, const Vec3& b) { return a.dot(b) / a.cross(b).norm(); };
