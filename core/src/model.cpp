@@ -114,8 +114,12 @@ constexpr Scalar ZERO_HINGE_WEIGHT = 1e-12;
 // a fabric of rigidity B stores over the area the hinge serves, B / 2 times (A1 + A2) / 3: its
 // two triangles unfolded into a plane (points p_i), a bend z = (d . p)^2 / 2 in direction d
 // gives u = d^T M d with M = sum k_i p_i p_i^T / 2, whose square averages ((a + c) / 2)^2 +
-// (((a - c) / 2)^2 + b^2) / 2 over d for M = [a b; b c]. Returned as {energy, expected}.
-std::pair<Scalar, Scalar> hinge_bend_energy(const Hinge& hinge, const std::vector<Vec3>& rest, Scalar rigidity) {
+// (((a - c) / 2)^2 + b^2) / 2 over d for M = [a b; b c].
+struct BendEnergy {
+  Scalar energy = 0;    ///< the hinges' (or hinge's), averaged over the bend's directions
+  Scalar expected = 0;  ///< the fabric's over the area they serve
+};
+BendEnergy hinge_bend_energy(const Hinge& hinge, const std::vector<Vec3>& rest, Scalar rigidity) {
   const auto x = [&](int i) -> const Vec3& { return rest[std::size_t(hinge.v[std::size_t(i)])]; };
   const Vec3 e0 = x(1) - x(0);
   const Scalar length = e0.norm();
@@ -139,18 +143,20 @@ std::pair<Scalar, Scalar> hinge_bend_energy(const Hinge& hinge, const std::vecto
 // edge's ends', and its weights are divided by the square root of it. An equilateral mesh's
 // calibration is 1; only the triangles' shapes set it, never the bend or the rigidity.
 void calibrate_hinges(Model& model, std::size_t first, Scalar rigidity) {
-  std::vector<std::pair<Scalar, Scalar>> around(model.initial_positions.size());  // a vertex's summed {energy, expected}
+  std::vector<BendEnergy> around(model.initial_positions.size());  // summed over a vertex's edges' hinges
   for (std::size_t h = first; h < model.hinges.size(); ++h) {
-    const auto [energy, expected] = hinge_bend_energy(model.hinges[h], model.initial_positions, rigidity);
+    const BendEnergy e = hinge_bend_energy(model.hinges[h], model.initial_positions, rigidity);
     for (int end : {model.hinges[h].v[0], model.hinges[h].v[1]}) {
-      around[std::size_t(end)].first += energy;
-      around[std::size_t(end)].second += expected;
+      around[std::size_t(end)].energy += e.energy;
+      around[std::size_t(end)].expected += e.expected;
     }
   }
   for (std::size_t h = first; h < model.hinges.size(); ++h) {
     Hinge& hinge = model.hinges[h];
-    const auto ratio = [&](int v) { return around[std::size_t(v)].first / around[std::size_t(v)].second; };
+    const auto ratio = [&](int v) { return around[std::size_t(v)].energy / around[std::size_t(v)].expected; };
     const Scalar calibration = 0.5 * (ratio(hinge.v[0]) + ratio(hinge.v[1]));
+    // Where the hinges at an edge's ends store nothing to compare (a calibration of zero, or
+    // not finite beside a sliver of a triangle), the hinge keeps its weights as they are.
     if (!(calibration > 0 && std::isfinite(calibration))) continue;
     for (Scalar& k : hinge.k) k /= std::sqrt(calibration);
   }
@@ -194,9 +200,10 @@ void add_hinges(Model& model, const TriangleMesh& mesh, int offset, Scalar rigid
 // u = (x00 - x10 - x01 + x11) sqrt(2 B a b) / (a b). Their energy is B (x_uu^2 + x_vv^2 +
 // 2 x_uv^2) / 2 a square metre: B c^2 / 2 for a bend of curvature c in any direction, nothing
 // for an in-plane affine map, and stiffness against every pattern of vertices up and down. The
-// hinges of a grid's right triangles had none against the checkerboard z = w (-1)^(i+j)
-// (docs/materials.md); this gives it four times the stiffness of stripes of the same spacing,
-// as the continuum does. Its stencils join each vertex to the neighbours the bend springs do.
+// hinges of a grid's right triangles gave the checkerboard z = w (-1)^(i+j) 0.43 times the
+// energy of stripes of the same spacing, from their diagonals' hinges alone (docs/materials.md);
+// this gives it four times, as the continuum does. Its stencils join no pairs of vertices
+// beyond those the stretch, shear and bend springs join.
 void add_grid_bending(Model& model, const GridMesh& grid, int offset, Scalar rigidity, Scalar damping_time) {
   if (!(rigidity > 0)) return;  // a scene pays only for what it asks for
   const auto [a, b] = cell_sides(model, grid, offset);
@@ -214,13 +221,15 @@ void add_grid_bending(Model& model, const GridMesh& grid, int offset, Scalar rig
     const Scalar s = std::sqrt(rigidity * area) / (h * h);
     add({before, c, after, c}, {s, -2 * s, s, 0});
   };
+  const auto border = [](int k, int last) { return k == 0 || k == last ? 0.5 : 1.0; };  // a border vertex's share
   for (int j = 0; j <= m; ++j)
-    for (int i = 1; i < n; ++i) second_difference(at(i - 1, j), at(i, j), at(i + 1, j), a, a * b * (j == 0 || j == m ? 0.5 : 1));
+    for (int i = 1; i < n; ++i) second_difference(at(i - 1, j), at(i, j), at(i + 1, j), a, a * b * border(j, m));
   for (int i = 0; i <= n; ++i)
-    for (int j = 1; j < m; ++j) second_difference(at(i, j - 1), at(i, j), at(i, j + 1), b, a * b * (i == 0 || i == n ? 0.5 : 1));
+    for (int j = 1; j < m; ++j) second_difference(at(i, j - 1), at(i, j), at(i, j + 1), b, a * b * border(i, n));
   const Scalar twist = std::sqrt(2 * rigidity * a * b) / (a * b);
   for (int j = 0; j < m; ++j)
-    for (int i = 0; i < n; ++i) add({at(i, j), at(i + 1, j), at(i, j + 1), at(i + 1, j + 1)}, {twist, -twist, -twist, twist});
+    for (int i = 0; i < n; ++i)
+      add({at(i, j), at(i + 1, j), at(i, j + 1), at(i + 1, j + 1)}, {twist, -twist, -twist, twist});
 }
 
 // Memory a run of a scene needs, measured on drape_sphere.json at 64 x 64 and 128 x 128 quads

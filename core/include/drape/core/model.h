@@ -28,15 +28,18 @@ struct Spring {
   Scalar compression = 1; ///< its constant in compression over its constant in tension (Material::compression)
 };
 
-/// One hinge of the quadratic bending model (Bergou, Wardetzky, Harmon, Zorin and Grinspun, "A
-/// quadratic bending model for inextensible surfaces", SGP 2006): an interior edge (vertices
-/// v[0], v[1]) and the corners opposite it (v[2], v[3]). Its energy is 1/2 |u|^2 with u =
-/// sum k_i x_i, the weights k from the rest triangles' cotangents times sqrt(B / (A1 + A2))
-/// (B the bending rigidity, A1 and A2 their areas), so that a cloth bent into a cylinder of
-/// curvature c stores B c^2 / 2 a square metre. u is zero for every rigid motion and every
-/// affine image of the rest hinge (uniform stretch, compression or shear in its plane): the
-/// model resists bending, not in-plane compression. The force on x_i is -k_i (u + damping
-/// du/dt); both are linear in the positions, so the stiffness matrix is constant.
+/// One stencil of a cloth's bending, energy 1/2 |u|^2 with u = sum k_i x_i. On a mesh, a hinge of
+/// the quadratic bending model (Bergou, Wardetzky, Harmon, Zorin and Grinspun, "A quadratic
+/// bending model for inextensible surfaces", SGP 2006): an interior edge (vertices v[0], v[1])
+/// and the corners opposite it (v[2], v[3]), the weights k from the rest triangles' cotangents
+/// times sqrt(B / (A1 + A2)) (B the bending rigidity, A1 and A2 their areas), calibrated to the
+/// triangles' shapes so that a cloth bent into a cylinder of curvature c stores B c^2 / 2 a
+/// square metre (model.cpp, calibrate_hinges). On a grid, a second difference along a row or a
+/// column or a cell's twist (model.cpp, add_grid_bending); a three-point stencil repeats a
+/// corner with weight 0. u is zero for every rigid motion and every affine image of the rest
+/// shape (uniform stretch, compression or shear in its plane): the model resists bending, not
+/// in-plane compression. The force on x_i is -k_i (u + damping du/dt); both are linear in the
+/// positions, so the stiffness matrix is constant.
 struct Hinge {
   std::array<int, 4> v{};    ///< global vertex indices
   std::array<Scalar, 4> k{};  ///< sqrt(N m) / m
