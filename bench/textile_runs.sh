@@ -13,7 +13,12 @@
 # (about 40 minutes on this 2-core machine, most of it the 3 mm discs): a benchmark, not a test.
 # Usage: bench/textile_runs.sh [BUILD_DIR] [OUT]; PRESETS="royal-target ..." for a subset,
 # MESHES="disc_30cm_12mm.obj disc_30cm.obj" for fewer resolutions, COMPRESSION=0.01 to give
-# every run's material that `compression` (docs/materials.md; default: the presets' linear springs).
+# every run's material that `compression` (docs/materials.md; default: the presets' linear springs),
+# SPECIMENS=K for K specimens a resolution in place of one: the disc tilted by TILT degrees (0.5)
+# about a level axis at K azimuths 360/K apart, as a specimen is never laid perfectly level; a
+# limp fabric's single run can land on one of several fold patterns (docs/benchmarks.md), so
+# the table then gives the specimens' mean coefficient, its spread (largest - smallest) and
+# their nodes, and the changes of the means (about K times as long).
 set -uo pipefail
 cd "$(dirname "$0")/.."
 ROOT=$(pwd)
@@ -25,9 +30,15 @@ mkdir -p "$OUT"
 failed=0
 
 # A shipped scene ($1) with another preset ($2) and its meshes' paths made absolute; for the
-# Cusick scene, the disc's mesh is $3.
+# Cusick scene, the disc's mesh is $3 and, given $4, the disc is tilted by TILT degrees about a
+# level axis at azimuth $4 degrees (the scene's cloth transform must be the one matched here).
 scene_with() {
+  local tilt=""
+  if [ -n "${4:-}" ]; then
+    tilt=$(awk -v t="$TILT" -v a="$4" 'BEGIN { r = a * atan2(0, -1) / 180; printf "\"rotate\": [%s, %.9f, %.9f, 0], ", t, cos(r), sin(r) }')
+  fi
   sed -E -e "s/\"preset\": \"[a-z0-9-]+\"/\"preset\": \"$2\"${COMPRESSION:+, \"compression\": $COMPRESSION}/" -e "s|meshes/disc_30cm\.obj|meshes/${3:-disc_30cm.obj}|" \
+    -e "s|\"transform\": \{\"translate\": \[0, 0, 0.305\]\}|\"transform\": {$tilt\"translate\": [0, 0, 0.305]}|" \
     -e "s|\"mesh\": \"meshes/|\"mesh\": \"$ROOT/scenes/meshes/|" "scenes/$1.json"
 }
 
@@ -37,36 +48,63 @@ measure() {
 }
 
 MESHES=${MESHES:-disc_30cm_12mm.obj disc_30cm.obj disc_30cm_3mm.obj}
-printf "%-19s | %s | %-8s | %-6s | %-11s | %s\n" preset "Cusick per mesh ($MESHES; compression ${COMPRESSION:-1}): DC (at frame 40) nodes, seconds" \
+SPECIMENS=${SPECIMENS:-1}
+TILT=${TILT:-0.5}
+[[ "$SPECIMENS" =~ ^[1-9][0-9]*$ && "$TILT" =~ ^[0-9]+(\.[0-9]+)?$ ]] ||
+  { echo "textile_runs.sh: expected SPECIMENS of 1 or more and TILT in degrees (a number)" >&2; exit 2; }
+cusick_heading="DC (at frame 40) nodes, seconds"
+[ "$SPECIMENS" -gt 1 ] && cusick_heading="$SPECIMENS specimens tilted $TILT degrees: mean DC, spread, nodes, seconds"
+printf "%-19s | %s | %-8s | %-6s | %-11s | %s\n" preset "Cusick per mesh ($MESHES; compression ${COMPRESSION:-1}): $cusick_heading" \
   "DC changes" "pen" "cantilever" "published DC, nodes"
 for preset in $PRESETS; do
   cells=()
   last=()
   pen=0
   for mesh in $MESHES; do
-    run="$OUT/cusick-$preset-${mesh%.obj}"
-    scene_with cusick_drape "$preset" "$mesh" > "$OUT/cusick-$preset-${mesh%.obj}.json"
+    values=()  # "coefficient coefficient-at-40 nodes" of each specimen
     start=$(date +%s%N)
-    if ! "$DRAPE" run "$OUT/cusick-$preset-${mesh%.obj}.json" --check --quiet --overwrite --out "$run"; then
-      echo "$preset on $mesh: the run failed" >&2
-      failed=1
-      cells+=("failed")
-      last+=("")
-      continue
-    fi
+    for ((k = 0; k < SPECIMENS; ++k)); do
+      run="$OUT/cusick-$preset-${mesh%.obj}"
+      azimuth=""
+      if [ "$SPECIMENS" -gt 1 ]; then
+        run+="-specimen$k"
+        azimuth=$(awk -v k="$k" -v n="$SPECIMENS" 'BEGIN { printf "%g", 360 * k / n }')
+      fi
+      scene_with cusick_drape "$preset" "$mesh" "$azimuth" > "$run.json"
+      if [ -n "$azimuth" ] && ! grep -q '"rotate"' "$run.json"; then
+        echo "textile_runs.sh: scenes/cusick_drape.json's cloth transform is not the one this script tilts" >&2
+        exit 2
+      fi
+      if ! "$DRAPE" run "$run.json" --check --quiet --overwrite --out "$run"; then
+        echo "$preset on $mesh: the run failed" >&2
+        failed=1
+        continue
+      fi
+      read -r dc nodes < <(measure "$run" 60)
+      read -r dc40 _ < <(measure "$run" 40)
+      if ! [[ "$dc" =~ ^-?[0-9.]+$ && "$dc40" =~ ^-?[0-9.]+$ && "$nodes" =~ ^[0-9]+$ ]]; then
+        echo "$preset on $mesh: drape measure cusick failed" >&2
+        failed=1
+        continue
+      fi
+      pen=$((pen + $(awk -F, 'NR == 1 { for (i = 1; i <= NF; ++i) c[$i] = i; next } { p += $c["penetrations"] } END { print p + 0 }' "$run/stats.csv")))
+      values+=("$dc $dc40 $nodes")
+    done
     seconds=$(awk -v a="$start" -v b="$(date +%s%N)" 'BEGIN { printf "%.0f", (b - a) / 1e9 }')
-    read -r dc nodes < <(measure "$run" 60)
-    read -r dc40 _ < <(measure "$run" 40)
-    if ! [[ "$dc" =~ ^-?[0-9.]+$ && "$dc40" =~ ^-?[0-9.]+$ && "$nodes" =~ ^[0-9]+$ ]]; then
-      echo "$preset on $mesh: drape measure cusick failed" >&2
-      failed=1
+    if [ "${#values[@]}" -ne "$SPECIMENS" ]; then
       cells+=("failed")
       last+=("")
-      continue
+    elif [ "$SPECIMENS" -eq 1 ]; then
+      read -r dc dc40 nodes <<< "${values[0]}"
+      cells+=("$(printf "%.3f (%.3f) %d, %s s" "$dc" "$dc40" "$nodes" "$seconds")")
+      last+=("$dc")
+    else
+      mean=$(printf "%s\n" "${values[@]}" | awk '{ s += $1 } END { printf "%.4f", s / NR }')
+      cells+=("$(printf "%s\n" "${values[@]}" | awk -v t="$seconds" '
+        { s += $1; lo = (NR == 1 || $1 < lo) ? $1 : lo; hi = (NR == 1 || $1 > hi) ? $1 : hi; n = n (NR > 1 ? "/" : "") $3 }
+        END { printf "%.3f spread %.3f nodes %s, %s s", s / NR, hi - lo, n, t }')")
+      last+=("$mean")
     fi
-    pen=$((pen + $(awk -F, 'NR == 1 { for (i = 1; i <= NF; ++i) c[$i] = i; next } { p += $c["penetrations"] } END { print p + 0 }' "$run/stats.csv")))
-    cells+=("$(printf "%.3f (%.3f) %d, %s s" "$dc" "$dc40" "$nodes" "$seconds")")
-    last+=("$dc")
   done
   diff=""
   for ((k = 1; k < ${#last[@]}; ++k)); do  # a failed resolution leaves its changes as "-"
