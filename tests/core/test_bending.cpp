@@ -29,6 +29,19 @@ Model strip(Scalar x, Scalar y, int n, int m, Scalar rigidity) {
   return model_of(json.str());
 }
 
+// The bending energy at positions x of the stencils whose corners all rest within `inner` of
+// `centre` along x and y (a window away from the border).
+Scalar window_energy(const Model& model, const std::vector<Vec3>& x, const Vec3& centre, Scalar inner) {
+  Scalar e = 0;
+  for (const Hinge& hinge : model.hinges) {
+    bool inside = true;
+    for (int v : hinge.v)
+      inside = inside && (model.initial_positions[std::size_t(v)] - centre).cwiseAbs().maxCoeff() < inner;
+    if (inside) e += 0.5 * hinge_vector(hinge, x).squaredNorm();
+  }
+  return e;
+}
+
 Scalar bending_energy(const Model& model, const std::vector<Vec3>& x) {
   Scalar e = 0;
   for (const Hinge& hinge : model.hinges) e += 0.5 * hinge_vector(hinge, x).squaredNorm();
@@ -145,14 +158,7 @@ TEST(Bending, AGridBendsAlikeInEveryDirection) {
       const Scalar s = (p - centre).dot(across), t = (p - centre).dot(along);
       x.push_back(centre + R * std::sin(s / R) * across + t * along + Vec3(0, 0, R - R * std::cos(s / R)));
     }
-    Scalar e = 0;
-    for (const Hinge& hinge : model.hinges) {
-      bool inside = true;
-      for (int v : hinge.v)
-        inside = inside && (model.initial_positions[std::size_t(v)] - centre).cwiseAbs().maxCoeff() < inner;
-      if (inside) e += 0.5 * hinge_vector(hinge, x).squaredNorm();
-    }
-    return e;
+    return window_energy(model, x, centre, inner);
   };
   const Scalar straight = interior_energy(0);
   ASSERT_GT(straight, 0);
@@ -176,14 +182,7 @@ TEST(Bending, AGridResistsTheCheckerboardFourTimesAsMuchAsStripes) {
       const int i = int(std::lround(p.x() / 0.01)), j = int(std::lround(p.y() / 0.01));
       x.push_back(p + Vec3(0, 0, height(i, j)));
     }
-    Scalar e = 0;
-    for (const Hinge& hinge : model.hinges) {
-      bool inside = true;
-      for (int v : hinge.v)
-        inside = inside && (model.initial_positions[std::size_t(v)] - centre).cwiseAbs().maxCoeff() < inner;
-      if (inside) e += 0.5 * hinge_vector(hinge, x).squaredNorm();
-    }
-    return e;
+    return window_energy(model, x, centre, inner);
   };
   const auto sign = [](int k) { return k % 2 == 0 ? 1.0 : -1.0; };
   const Scalar checkerboard = interior_energy([&](int i, int j) { return w * sign(i + j); });
