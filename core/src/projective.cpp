@@ -214,7 +214,35 @@ Scalar ProjectiveSolver::evaluate(const std::vector<Vec3>& x, Block* gradient) {
     return 0.5 * mass * inertia.squaredNorm() + 0.5 * air * drag.squaredNorm();
   };
   Scalar total = 0;
-  if (gradient) {
+  if (gradient && arena_->max_concurrency() == 1) {
+    // L-BFGS on one thread: the parallel pass's sums in the same order (each vertex's term,
+    // then its springs' pulls in the model's order; the energies by blocks of PARALLEL_GRAIN),
+    // so the same bits, in one pass over the springs without storing their pulls (at 32 x 32
+    // the separate passes and their tasks cost more than the pulls themselves).
+    std::vector<Vec3>& g = gradient_rows_;
+    g.resize(std::size_t(free_count_));
+    const auto blocked_sum = [](std::size_t count, const auto& term) {
+      Scalar sum = 0, block = 0;
+      for (std::size_t k = 0; k < count; ++k) {
+        if (k > 0 && k % PARALLEL_GRAIN == 0) sum += block, block = 0;
+        block += term(k);
+      }
+      return count > 0 ? sum + block : sum;
+    };
+    const Scalar vertex_total = blocked_sum(x.size(), [&](std::size_t v) {
+      const int a = free_index_[v];
+      return a < 0 ? Scalar(0) : vertex(v, a, g[std::size_t(a)]);
+    });
+    const Scalar spring_total = blocked_sum(sys.springs.size(), [&](std::size_t k) {
+      Vec3 pull, target;
+      const Scalar energy = spring(k, pull, target);
+      const SpringTerm& s = sys.springs[k];
+      if (s.a >= 0) g[std::size_t(s.a)] += pull;
+      if (s.b >= 0) g[std::size_t(s.b)] -= pull;
+      return energy;
+    });
+    total = vertex_total + spring_total;
+  } else if (gradient) {
     // L-BFGS: in parallel, springs then vertices, each vertex summing its springs' pulls in
     // the model's order, and the energies summed by fixed blocks in order: the same bits for
     // any thread count.
@@ -446,7 +474,7 @@ bool ProjectiveSolver::quasi_newton(std::vector<Vec3>& positions, std::string& e
     step_s_.resize(free_count_, 3);  // the move made: keep_out may have changed the trial's
     for (std::size_t v = 0; v < positions.size(); ++v)
       if (const int a = free_index_[v]; a >= 0) step_s_.row(a) = (trial_[v] - positions[v]).transpose();
-    const Scalar moved = step_s_.rowwise().norm().maxCoeff();
+    const Scalar moved = std::sqrt(step_s_.rowwise().squaredNorm().maxCoeff());  // one root, not one a row
     step_t_ = trial_gradient_ - gradient_;
     const Scalar curvature = dot(step_s_, step_t_);
     if (curvature > std::numeric_limits<Scalar>::epsilon() * std::sqrt(dot(step_s_, step_s_) * dot(step_t_, step_t_))) {

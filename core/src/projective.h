@@ -142,6 +142,10 @@ class ProjectiveSolver {
   // an iterate x needs after keep_out and its evaluation: activate, release, gradient kept raw
   // in raw_gradient_ and projected; whether the set changed.
   void keep_out(std::vector<Vec3>& x);
+  // Whether x is surely farther than its gap from a sphere constraint, without a root (false:
+  // not known, ask surface).
+  bool clear_of(int constraint, int a, const Vec3& x) const;
+  static constexpr Scalar CLEAR_MARGIN = 1e-9;  // relative, on the squared distance
   bool activate();
   void refresh_active(const std::vector<Vec3>& x);
   bool release(const Block& gradient);
@@ -259,6 +263,8 @@ class ProjectiveSolver {
   std::vector<ActiveContact> active_;  // by vertex
   std::vector<char> is_active_;        // per shape and free vertex (shape-major)
   std::vector<std::pair<int, int>> entered_;  // (vertex, shape) moved out by the last keep_out
+  std::vector<int> moved_;                    // keep_out's first pass: the vertices it moved
+  std::vector<char> moved_mark_;              // per vertex: in moved_
   Scalar contact_work_ = 0;
 };
 

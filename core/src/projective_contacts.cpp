@@ -133,24 +133,45 @@ Scalar ProjectiveSolver::contact_terms(const std::vector<Vec3>& x, std::vector<V
 void ProjectiveSolver::keep_out(std::vector<Vec3>& x) {
   entered_.clear();
   // An active vertex is put back on its surface at its gap (a step along a sphere's tangent
-  // leaves it); any other closer than its gap is moved out to it. A second pass when there are
-  // several constraints: moving out of one can move a vertex into another (a ball on the
-  // ground, a table's edge).
+  // leaves it); any other closer than its gap is moved out to it. A second pass over the
+  // vertices the first moved when there are several constraints: moving out of one can move a
+  // vertex into another (a ball on the ground, a table's edge); a vertex the first pass left
+  // where it was is left again.
   const auto hold = [&](int constraint, std::size_t v) {
     const int a = free_index_[v];
-    if (a < 0 || fixed_[std::size_t(a)]) return;
+    if (a < 0 || fixed_[std::size_t(a)]) return false;
     const bool active = active_flag(constraint, a);
+    if (!active && clear_of(constraint, a, x[v])) return false;
     const auto [beyond, normal] = surface(constraint, a, x[v]);
-    if (!(beyond < 0) && !active) return;
+    if (!(beyond < 0) && !active) return false;
     x[v] -= beyond * normal;
     if (!active) entered_.emplace_back(int(v), constraint);
+    return true;
   };
-  const int passes = shapes_.size() + planes_.size() > 1 ? 2 : 1;
-  for (int pass = 0; pass < passes; ++pass) {
-    for (std::size_t k = 0; k < shapes_.size(); ++k)
-      for (std::size_t v = 0; v < x.size(); ++v) hold(int(k), v);
-    for (std::size_t p = 0; p < planes_.size(); ++p) hold(int(shapes_.size() + p), std::size_t(planes_[p].vertex));
-  }
+  const bool second_pass = shapes_.size() + planes_.size() > 1;
+  moved_.clear();
+  if (second_pass) moved_mark_.assign(x.size(), 0);
+  const auto held = [&](int constraint, std::size_t v) {
+    if (hold(constraint, v) && second_pass && !moved_mark_[v]) moved_mark_[v] = 1, moved_.push_back(int(v));
+  };
+  for (std::size_t k = 0; k < shapes_.size(); ++k)
+    for (std::size_t v = 0; v < x.size(); ++v) held(int(k), v);
+  for (std::size_t p = 0; p < planes_.size(); ++p) held(int(shapes_.size() + p), std::size_t(planes_[p].vertex));
+  if (!second_pass) return;
+  std::sort(moved_.begin(), moved_.end());  // the order a pass over every vertex would take
+  for (std::size_t k = 0; k < shapes_.size(); ++k)
+    for (int v : moved_) hold(int(k), std::size_t(v));
+  for (std::size_t p = 0; p < planes_.size(); ++p)
+    if (moved_mark_[std::size_t(planes_[p].vertex)]) hold(int(shapes_.size() + p), std::size_t(planes_[p].vertex));
+}
+
+bool ProjectiveSolver::clear_of(int constraint, int a, const Vec3& x) const {
+  // Only a sphere's distance needs a root; its square is compared with a margin far above
+  // the rounding of the distance itself, so that a vertex it calls clear is clear by surface.
+  const auto k = std::size_t(constraint);
+  if (k >= shapes_.size() || !shapes_[k].sphere) return false;
+  const Scalar reach = shapes_[k].radius + kept_gap_[k * std::size_t(free_count_) + std::size_t(a)];
+  return reach > 0 && (x - shapes_[k].point).squaredNorm() > reach * reach * (1 + CLEAR_MARGIN);
 }
 
 bool ProjectiveSolver::activate() {
