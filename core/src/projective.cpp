@@ -8,6 +8,8 @@
 #include <tbb/parallel_for.h>
 #include <tbb/task_arena.h>
 
+#include "spring_pulls.h"
+
 namespace drape {
 namespace {
 
@@ -44,6 +46,15 @@ ProjectiveSolver::ProjectiveSolver(const Model& model, std::vector<int> free_ind
     for (int end : {s.i, s.j})
       if (const int a = free_index_[std::size_t(end)]; a >= 0) ++incidence_start_[std::size_t(a) + 1];
   for (int a = 0; a < free_count_; ++a) incidence_start_[std::size_t(a) + 1] += incidence_start_[std::size_t(a)];
+  // The springs' ends, and their arrays (the padding a spring along x of unit length, at rest,
+  // with no weight).
+  for (const Spring& s : model.springs)
+    spring_ends_.push_back({s.i, s.j, free_index_[std::size_t(s.i)], free_index_[std::size_t(s.j)]});
+  const std::size_t padded = padded_springs();
+  SpringArrays& arrays = spring_arrays_;
+  for (std::vector<double>* v : {&arrays.sx, &arrays.d0x}) v->assign(padded, 1);
+  for (std::vector<double>* v : {&arrays.sy, &arrays.sz, &arrays.d0y, &arrays.d0z}) v->assign(padded, 0);
+  spring_chunk_ = std::make_unique<SpringChunk>();
   incidence_.resize(std::size_t(incidence_start_.back()));
   std::vector<int> filled(incidence_start_.begin(), incidence_start_.end() - 1);
   for (std::size_t k = 0; k < model.springs.size(); ++k) {
@@ -85,6 +96,10 @@ ProjectiveSolver::System* ProjectiveSolver::system(Scalar h, std::string& error)
   for (const Spring& s : m.springs)
     sys.springs.push_back({s.i, s.j, free_index_[std::size_t(s.i)], free_index_[std::size_t(s.j)], s.rest_length,
                            h * h * s.stiffness, h * s.damping});
+  const std::size_t padded = padded_springs();
+  sys.rest.assign(padded, 0), sys.elastic.assign(padded, 0), sys.viscous.assign(padded, 0);
+  for (std::size_t k = 0; k < sys.springs.size(); ++k)
+    sys.rest[k] = sys.springs[k].rest, sys.elastic[k] = sys.springs[k].elastic, sys.viscous[k] = sys.springs[k].viscous;
   sys.matrix.resize(free_count_, free_count_);
   sys.matrix.setFromTriplets(entries.begin(), entries.end());  // duplicates summed
   sys.matrix.makeCompressed();
@@ -114,10 +129,13 @@ bool ProjectiveSolver::solve(const ProjectiveStep& step, std::vector<Vec3>& posi
   const CholmodFactor* factor = &sys->factor;
   spring_start_.resize(sys->springs.size());
   spring_direction_.resize(sys->springs.size());
+  SpringArrays& arrays = spring_arrays_;
   for (std::size_t k = 0; k < sys->springs.size(); ++k) {
     const Vec3 z0 = x0[std::size_t(sys->springs[k].i)] - x0[std::size_t(sys->springs[k].j)];
     spring_start_[k] = z0;
     spring_direction_[k] = z0.norm() > 0 ? Vec3(z0.normalized()) : Vec3::UnitX();
+    arrays.sx[k] = z0.x(), arrays.sy[k] = z0.y(), arrays.sz[k] = z0.z();
+    arrays.d0x[k] = spring_direction_[k].x(), arrays.d0y[k] = spring_direction_[k].y(), arrays.d0z[k] = spring_direction_[k].z();
   }
 
   // The right-hand side's constant part: M y + h a M (x0 + h w) and the held vertices' pull.
@@ -214,64 +232,93 @@ Scalar ProjectiveSolver::evaluate(const std::vector<Vec3>& x, Block* gradient) {
     return 0.5 * mass * inertia.squaredNorm() + 0.5 * air * drag.squaredNorm();
   };
   Scalar total = 0;
-  if (gradient && arena_->max_concurrency() == 1) {
-    // L-BFGS on one thread: the parallel pass's sums in the same order (each vertex's term,
-    // then its springs' pulls in the model's order; the energies by blocks of PARALLEL_GRAIN),
-    // so the same bits, in one pass over the springs without storing their pulls (at 32 x 32
-    // the separate passes and their tasks cost more than the pulls themselves).
-    std::vector<Vec3>& g = gradient_rows_;
-    g.resize(std::size_t(free_count_));
-    const auto blocked_sum = [](std::size_t count, const auto& term) {
-      Scalar sum = 0, block = 0;
-      for (std::size_t k = 0; k < count; ++k) {
-        if (k > 0 && k % PARALLEL_GRAIN == 0) sum += block, block = 0;
-        block += term(k);
-      }
-      return count > 0 ? sum + block : sum;
-    };
-    const Scalar vertex_total = blocked_sum(x.size(), [&](std::size_t v) {
-      const int a = free_index_[v];
-      return a < 0 ? Scalar(0) : vertex(v, a, g[std::size_t(a)]);
-    });
-    const Scalar spring_total = blocked_sum(sys.springs.size(), [&](std::size_t k) {
-      Vec3 pull, target;
-      const Scalar energy = spring(k, pull, target);
-      const SpringTerm& s = sys.springs[k];
-      if (s.a >= 0) g[std::size_t(s.a)] += pull;
-      if (s.b >= 0) g[std::size_t(s.b)] -= pull;
-      return energy;
-    });
-    total = vertex_total + spring_total;
-  } else if (gradient) {
-    // L-BFGS: in parallel, springs then vertices, each vertex summing its springs' pulls in
-    // the model's order, and the energies summed by fixed blocks in order: the same bits for
-    // any thread count.
+  if (gradient) {
+    // L-BFGS: the springs' pulls and energies many at a time (spring_pulls, the formula
+    // above's bits), then each free vertex's term and its springs' pulls in the model's order,
+    // and the energies summed by fixed blocks in order: the same bits for any thread count.
     const std::size_t springs = sys.springs.size(), vertices = x.size();
-    pulls_.resize(springs);
-    spring_energy_.resize(springs);
-    vertex_energy_.assign(vertices, 0);
+    const SpringArrays& a = spring_arrays_;
+    // The springs [begin, end) of one chunk (begin a multiple of SPRING_CHUNK): z gathered into
+    // the chunk's arrays (the padding a spring along x of unit length), their pulls and
+    // energies out into them.
+    const auto chunk_pulls = [&](std::size_t begin, std::size_t end, SpringChunk& c) {
+      const std::size_t count = end - begin, padded = (count + SPRING_LANES - 1) / SPRING_LANES * SPRING_LANES;
+      for (std::size_t k = 0; k < count; ++k) {
+        const SpringEnds& e = spring_ends_[begin + k];
+        const Vec3 z = x[std::size_t(e.i)] - x[std::size_t(e.j)];
+        c.zx[k] = z.x(), c.zy[k] = z.y(), c.zz[k] = z.z();
+      }
+      for (std::size_t k = count; k < padded; ++k) c.zx[k] = 1, c.zy[k] = 0, c.zz[k] = 0;
+      spring_pulls({c.zx.data(), c.zy.data(), c.zz.data(), a.sx.data() + begin, a.sy.data() + begin, a.sz.data() + begin,
+                    a.d0x.data() + begin, a.d0y.data() + begin, a.d0z.data() + begin, sys.rest.data() + begin,
+                    sys.elastic.data() + begin, sys.viscous.data() + begin, padded},
+                   {c.px.data(), c.py.data(), c.pz.data(), c.energy.data()});
+    };
     std::vector<Vec3>& g = gradient_rows_;
     g.resize(std::size_t(free_count_));
-    arena_->execute([&] {
-      tbb::parallel_for(tbb::blocked_range<std::size_t>(0, springs, PARALLEL_GRAIN), [&](const auto& r) {
-        Vec3 target;
-        for (std::size_t k = r.begin(); k < r.end(); ++k) spring_energy_[k] = spring(k, pulls_[k], target);
-      });
-      tbb::parallel_for(tbb::blocked_range<std::size_t>(0, vertices, PARALLEL_GRAIN), [&](const auto& r) {
-        for (std::size_t v = r.begin(); v < r.end(); ++v) {
-          const int a = free_index_[v];
-          if (a < 0) continue;
-          Vec3 grad;
-          vertex_energy_[v] = vertex(v, a, grad);
-          for (int e = incidence_start_[std::size_t(a)]; e < incidence_start_[std::size_t(a) + 1]; ++e) {
-            const int end = incidence_[std::size_t(e)];
-            grad += (end % 2 == 0 ? 1.0 : -1.0) * pulls_[std::size_t(end / 2)];
-          }
-          g[std::size_t(a)] = grad;
+    if (arena_->max_concurrency() == 1) {
+      // One thread: the same sums in the same order in one pass, without tasks.
+      Scalar vertex_total = 0, spring_total = 0, block = 0;
+      for (std::size_t v = 0; v < vertices; ++v) {
+        if (v > 0 && v % PARALLEL_GRAIN == 0) vertex_total += block, block = 0;
+        const int f = free_index_[v];
+        block += f < 0 ? Scalar(0) : vertex(v, f, g[std::size_t(f)]);
+      }
+      if (vertices > 0) vertex_total += block;
+      block = 0;
+      SpringChunk& c = *spring_chunk_;
+      for (std::size_t begin = 0; begin < springs; begin += SPRING_CHUNK) {
+        const std::size_t end = std::min(springs, begin + SPRING_CHUNK);
+        chunk_pulls(begin, end, c);
+        if (begin > 0 && begin % PARALLEL_GRAIN == 0) spring_total += block, block = 0;
+        for (std::size_t k = begin; k < end; ++k) {
+          const SpringEnds& e = spring_ends_[k];
+          const Vec3 pull(c.px[k - begin], c.py[k - begin], c.pz[k - begin]);
+          if (e.a >= 0) g[std::size_t(e.a)] += pull;
+          if (e.b >= 0) g[std::size_t(e.b)] -= pull;
+          block += c.energy[k - begin];
         }
+      }
+      if (springs > 0) spring_total += block;
+      total = vertex_total + spring_total;
+    } else {
+      // In parallel: blocks of springs (each block's energy summed in order), then the vertices.
+      vertex_energy_.assign(vertices, 0);
+      pulls_.resize(springs);
+      const std::size_t blocks = (springs + PARALLEL_GRAIN - 1) / PARALLEL_GRAIN;
+      block_sums_.assign(blocks, 0);
+      arena_->execute([&] {
+        tbb::parallel_for(std::size_t(0), blocks, [&](std::size_t b) {
+          SpringChunk c;
+          Scalar sum = 0;
+          for (std::size_t begin = b * PARALLEL_GRAIN; begin < std::min(springs, (b + 1) * PARALLEL_GRAIN); begin += SPRING_CHUNK) {
+            const std::size_t end = std::min(springs, begin + SPRING_CHUNK);
+            chunk_pulls(begin, end, c);
+            for (std::size_t k = begin; k < end; ++k) {
+              pulls_[k] = Vec3(c.px[k - begin], c.py[k - begin], c.pz[k - begin]);
+              sum += c.energy[k - begin];
+            }
+          }
+          block_sums_[b] = sum;
+        });
+        tbb::parallel_for(tbb::blocked_range<std::size_t>(0, vertices, PARALLEL_GRAIN), [&](const auto& r) {
+          for (std::size_t v = r.begin(); v < r.end(); ++v) {
+            const int f = free_index_[v];
+            if (f < 0) continue;
+            Vec3 grad;
+            vertex_energy_[v] = vertex(v, f, grad);
+            for (int e = incidence_start_[std::size_t(f)]; e < incidence_start_[std::size_t(f) + 1]; ++e) {
+              const int end = incidence_[std::size_t(e)];
+              grad += (end % 2 == 0 ? 1.0 : -1.0) * pulls_[std::size_t(end / 2)];
+            }
+            g[std::size_t(f)] = grad;
+          }
+        });
       });
-    });
-    total = ordered_sum(vertex_energy_) + ordered_sum(spring_energy_);
+      Scalar spring_total = 0;
+      for (Scalar sum : block_sums_) spring_total += sum;
+      total = ordered_sum(vertex_energy_.data(), vertices) + spring_total;
+    }
   } else {
     // Local-global: the local step's right-hand side, summed serially.
     sums_ = base_;
@@ -322,14 +369,20 @@ Scalar ProjectiveSolver::evaluate(const std::vector<Vec3>& x, Block* gradient) {
   return total;
 }
 
-Scalar ProjectiveSolver::ordered_sum(const std::vector<Scalar>& values) {
+std::size_t ProjectiveSolver::padded_springs() const {
+  static_assert(PARALLEL_GRAIN % SPRING_CHUNK == 0 && SPRING_CHUNK % SPRING_LANES == 0,
+                "a block of springs is whole chunks, a chunk whole vectors");
+  return (model_.springs.size() + SPRING_LANES - 1) / SPRING_LANES * SPRING_LANES;
+}
+
+Scalar ProjectiveSolver::ordered_sum(const Scalar* values, std::size_t count) {
   // Blocks of PARALLEL_GRAIN summed in parallel, then the blocks' sums in order.
-  const std::size_t blocks = (values.size() + PARALLEL_GRAIN - 1) / PARALLEL_GRAIN;
+  const std::size_t blocks = (count + PARALLEL_GRAIN - 1) / PARALLEL_GRAIN;
   block_sums_.assign(blocks, 0);
   arena_->execute([&] {
     tbb::parallel_for(std::size_t(0), blocks, [&](std::size_t b) {
       Scalar sum = 0;
-      for (std::size_t i = b * PARALLEL_GRAIN; i < std::min(values.size(), (b + 1) * PARALLEL_GRAIN); ++i) sum += values[i];
+      for (std::size_t i = b * PARALLEL_GRAIN; i < std::min(count, (b + 1) * PARALLEL_GRAIN); ++i) sum += values[i];
       block_sums_[b] = sum;
     });
   });

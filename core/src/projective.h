@@ -118,6 +118,7 @@ class ProjectiveSolver {
     SparseMatrix matrix;
     CholmodFactor factor{CholmodFactor::Use::ManySolves};
     std::vector<SpringTerm> springs;
+    std::vector<double> rest, elastic, viscous;  // the springs' as arrays, padded (spring_pulls.h)
   };
   // The system of step size h, built and factorised on first use.
   System* system(Scalar h, std::string& error);
@@ -222,15 +223,33 @@ class ProjectiveSolver {
   Block gradient_, trial_gradient_, direction_;  // L-BFGS, over the free vertices (gradients projected)
   Block raw_gradient_;                           // the last iterate's gradient before projecting
   std::vector<Vec3> gradient_rows_;
-  // L-BFGS's parallel evaluation: each spring's pull on its end i and its energy, each
-  // vertex's energy, and each free vertex's springs (2 k for spring k's end i, 2 k + 1 for j).
+  // L-BFGS's evaluation: each spring's ends (global and free indices), its direction and
+  // length at the step's start as arrays (spring_pulls.h; padded with a spring along x of unit
+  // length), and a chunk of springs at a time through spring_pulls (z gathered, pulls and
+  // energies out; small enough to stay in the first-level cache); on several threads each
+  // spring's pull; each vertex's energy, and each free vertex's springs (2 k for spring k's
+  // end i, 2 k + 1 for j).
+  struct SpringEnds {
+    int i = 0, j = 0, a = -1, b = -1;
+  };
+  std::vector<SpringEnds> spring_ends_;
+  struct SpringArrays {
+    std::vector<double> sx, sy, sz, d0x, d0y, d0z;
+  } spring_arrays_;
+  static constexpr std::size_t SPRING_CHUNK = 256;  // divides PARALLEL_GRAIN, a multiple of SPRING_LANES
+  struct SpringChunk {
+    std::array<double, SPRING_CHUNK> zx, zy, zz, px, py, pz, energy;
+  };
+  std::unique_ptr<SpringChunk> spring_chunk_;
   std::vector<Vec3> pulls_;
-  std::vector<Scalar> spring_energy_, vertex_energy_, block_sums_;
+  std::vector<Scalar> vertex_energy_, block_sums_;
   std::vector<int> incidence_start_, incidence_;
   std::unique_ptr<tbb::task_arena> arena_;
   static constexpr std::size_t PARALLEL_GRAIN = 2048;  // springs or vertices a task, and a sum's block
   // values summed by blocks of PARALLEL_GRAIN, the blocks in order.
-  Scalar ordered_sum(const std::vector<Scalar>& values);
+  Scalar ordered_sum(const Scalar* values, std::size_t count);
+  // The model's springs rounded up to whole vectors of spring_pulls.
+  std::size_t padded_springs() const;
   std::vector<char> fixed_;  // per free vertex: held at its target (L-BFGS leaves it out)
   std::vector<Block> history_s_, history_t_;              // its steps and gradient changes (a ring)
   Block step_s_, step_t_;                                 // the last step's pair, before it is kept
