@@ -338,7 +338,8 @@ StepReport Integrator::step(State& state) {
     return advance(state);
   }
   const State before = state;
-  const Scalar energy_before = kinetic_energy(m, state) + potential_energy(m, state);
+  const Scalar potential_before = state.positions == ended_positions_ ? ended_potential_ : potential_energy(m, state);
+  const Scalar energy_before = kinetic_energy(m, state) + potential_before;
   // The friction of every attempt starts from the normal forces the step before left; the
   // kept attempt's are the next step's.
   const std::vector<Scalar> normal_force_before = work_->normal_force;
@@ -349,7 +350,9 @@ StepReport Integrator::step(State& state) {
     work_->normal_force = normal_force_before;
     StepReport report = advance(s);
     for (int k = 1; k < parts && report.ok; ++k) report.add(advance(s));
-    const Scalar excess = kinetic_energy(m, s) + potential_energy(m, s) - energy_before - report.external_work;
+    const Scalar potential = potential_energy(m, s);
+    ended_positions_ = s.positions, ended_potential_ = potential;  // the kept attempt's, if it was the last
+    const Scalar excess = kinetic_energy(m, s) + potential - energy_before - report.external_work;
     return std::make_pair(report, excess);
   };
   auto [report, excess] = take(state, 1);

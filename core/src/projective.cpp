@@ -537,8 +537,7 @@ bool ProjectiveSolver::quasi_newton(std::vector<Vec3>& positions, std::string& e
       history_rho_[std::size_t(newest)] = 1 / curvature;
       stored = std::min(stored + 1, memory);
     }
-    positions.swap(trial_);
-    trial_ = positions;
+    positions.swap(trial_);  // trial_'s free rows are written afresh; its others are the same
     gradient_.swap(trial_gradient_);
     objective = tried;
     // Converged when a whole step moved no vertex by more than the tolerance's share of an

@@ -165,6 +165,10 @@ class Integrator {
   std::unique_ptr<Workspace> work_;
   Scalar h_ = 0;                 // the step being taken: the scene's timestep or a part of it
   Scalar energy_tolerance_ = 0;  // J, see STEP_ENERGY_TOLERANCE
+  // The potential energy of the last step's end and the positions it was taken at: the next
+  // step's start, when nothing moved the cloth in between.
+  Scalar ended_potential_ = 0;
+  std::vector<Vec3> ended_positions_;
 };
 
 /// Diagnostics for the frame statistics.
