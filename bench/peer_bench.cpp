@@ -13,7 +13,11 @@
 // ground, frames with intersecting cloth triangles (drape's exact penetration check, which
 // shares no code with either side's collision handling), the largest stretch of a grid edge.
 //
-//   peer_bench [--cases small,fast,large,large-self] [--solvers projective,cholmod] [--frames 120] [--large-frames 20]
+// drape may take fewer steps a frame than Bullet's 8 where its results stay correct (issue 17):
+// --drape-steps lists the counts to run, each a row of its own, checked the same way.
+//
+//   peer_bench [--cases small,fast,large,large-self] [--solvers projective,cholmod] [--drape-steps 8,2]
+//              [--frames 120] [--large-frames 20]
 #include <BulletSoftBody/btSoftBodyHelpers.h>
 #include <BulletSoftBody/btSoftBodyRigidBodyCollisionConfiguration.h>
 #include <BulletSoftBody/btSoftRigidDynamicsWorld.h>
@@ -24,6 +28,7 @@
 #include <chrono>
 #include <cstdio>
 #include <memory>
+#include <string>
 
 #include "child_process.h"
 #include "drape/ccd_eval/evaluation.h"
@@ -36,7 +41,7 @@ using namespace drape;
 namespace {
 
 constexpr Scalar FRAME_TIME = 1.0 / 30;
-constexpr int STEPS_PER_FRAME = 8;
+constexpr int STEPS_PER_FRAME = 8;  // Bullet's substeps, and drape's unless --drape-steps says
 constexpr Scalar CLOTH_SIZE = 2, DROP_HEIGHT = 2.5;
 const Vec3 SPHERE_CENTRE(0, 0, 1);
 constexpr Scalar SPHERE_RADIUS = 0.5;
@@ -50,6 +55,7 @@ struct Case {
   Scalar speed = 0;      // initial downward speed, m/s
   bool self = false;
   int frames = 120;
+  int drape_steps = STEPS_PER_FRAME;  // drape's steps a frame
 };
 
 // What one side did, written by the child through a pipe (plain data only).
@@ -64,6 +70,7 @@ struct Result {
   long under_ground = 0;                  // vertex-frames below z = 0
   int intersecting_frames = 0;            // frames with cloth triangles meeting (not sharing a vertex)
   double max_stretch = 1;                 // grid edges (axis-aligned in the rest grid)
+  long halvings = -1;                     // drape: steps retaken in parts for energy they made (-1: not drape)
   long peak_kib = 0;
 };
 
@@ -76,7 +83,7 @@ std::string scene_json(const Case& c, const std::string& solver) {
                     "obstacles": [{"sphere": {"center": [0, 0, 1], "radius": %g}},
                                   {"plane": {"point": [0, 0, 0], "normal": [0, 0, 1]}}],
                     "solver": {"type": "%s"}, "collisions": {"self": %s}})",
-                FRAME_TIME, STEPS_PER_FRAME, c.frames, CLOTH_SIZE, CLOTH_SIZE, c.nodes - 1, c.nodes - 1, DROP_HEIGHT,
+                FRAME_TIME, c.drape_steps, c.frames, CLOTH_SIZE, CLOTH_SIZE, c.nodes - 1, c.nodes - 1, DROP_HEIGHT,
                 -c.speed, SPHERE_RADIUS, solver.c_str(), c.self ? "true" : "false");
   return text;
 }
@@ -123,6 +130,7 @@ Model check_model(Model model) {
 
 Result run_drape(const Case& c, const std::string& solver) {
   Result result;
+  result.halvings = 0;
   const Model model = build_model(parse_scene(scene_json(c, solver), "peer.json"));
   const Model check = check_model(model);
   State state = initial_state(model);
@@ -130,9 +138,10 @@ Result run_drape(const Case& c, const std::string& solver) {
   std::vector<double> falling, contact, solve;
   for (int frame = 1; frame <= c.frames; ++frame) {
     const auto begin = std::chrono::steady_clock::now();
-    for (int k = 0; k < STEPS_PER_FRAME; ++k) {
+    for (int k = 0; k < c.drape_steps; ++k) {
       const StepReport r = integrator.step(state);
       solve.push_back(r.solve_ms);
+      result.halvings += r.step_halvings;
       if (!r.ok) {
         std::snprintf(result.failure, sizeof result.failure, "frame %d: %s", frame, r.failure.c_str());
         summarise(falling, contact, result);
@@ -274,7 +283,7 @@ double back_substitution_ms(const Case& c) {
 
 void print_row(const std::string& side, const Result& r, const Result* bullet) {
   if (!r.ok && r.frames == 0) {
-    std::printf("  %-22s failed: %s\n", side.c_str(), r.failure);
+    std::printf("  %-28s failed: %s\n", side.c_str(), r.failure);
     return;
   }
   const auto cell = [](double ms) {
@@ -283,9 +292,9 @@ void print_row(const std::string& side, const Result& r, const Result* bullet) {
     else std::snprintf(text, sizeof text, "-");
     return std::string(text);
   };
-  std::printf("  %-22s %10s %10s %9.0f %8ld %8ld %8d/%-4d %8.3f", side.c_str(), cell(r.falling_ms).c_str(),
+  std::printf("  %-28s %10s %10s %9.0f %8ld %8ld %8d/%-4d %8.3f %8s", side.c_str(), cell(r.falling_ms).c_str(),
               cell(r.contact_ms).c_str(), r.peak_kib / 1024.0, r.inside_sphere, r.under_ground, r.intersecting_frames,
-              r.frames, r.max_stretch);
+              r.frames, r.max_stretch, r.halvings < 0 ? "-" : std::to_string(r.halvings).c_str());
   if (bullet && bullet->ok) {
     const auto ratio = [](double a, double b) {
       char text[32];
@@ -306,6 +315,7 @@ int main(int argc, char** argv) {
   std::vector<std::string> case_names{"small", "fast", "large", "large-self"};
   std::vector<std::string> solvers{"projective", "cholmod"};
   int frames = 120, large_frames = 20;
+  std::vector<int> drape_steps{STEPS_PER_FRAME, 2};
   app.add_option("--cases", case_names,
                  "small (32 x 32, gentle), fast (32 x 32 at 100 m/s), large (128 x 128), large-self (128 x 128 with "
                  "self-collision)")
@@ -314,6 +324,12 @@ int main(int argc, char** argv) {
   app.add_option("--solvers", solvers, "drape's solvers to run (solver.type)")
       ->delimiter(',')
       ->check(CLI::IsMember({"projective", "cholmod", "cg"}));
+  app.add_option("--drape-steps", drape_steps,
+                 "drape's steps a frame, a row for each (Bullet always takes 8 substeps); drape may take fewer where its "
+                 "results stay correct, which the checks of its row show")
+      ->delimiter(',')
+      ->capture_default_str()
+      ->check(CLI::Range(1, 1000));
   app.add_option("--frames", frames, "Frames of the 32 x 32 cases")->capture_default_str()->check(CLI::Range(1, 100000));
   app.add_option("--large-frames", large_frames, "Frames of the 128 x 128 cases")
       ->capture_default_str()
@@ -322,10 +338,12 @@ int main(int argc, char** argv) {
   std::setvbuf(stdout, nullptr, _IOLBF, 0);  // each row as it is measured, also into a file
 
   std::printf("peer_bench: a 2 m cloth dropped from 2.5 m onto a 0.5 m sphere 1 m above the ground; 30 frames a\n"
-              "second, 8 steps a frame; each side in its own process, one thread. ms a frame: medians over the\n"
-              "frames before any vertex is within %.0f cm of the sphere or the ground (falling) and after (contact).\n"
+              "second, Bullet 8 substeps a frame, drape the steps its row says; each side in its own process, one\n"
+              "thread. ms a frame: medians over the frames before any vertex is within %.0f cm of the sphere or the\n"
+              "ground (falling) and after (contact).\n"
               "Checks over every frame: vertex-frames inside the sphere and under the ground, frames with cloth\n"
-              "triangles meeting, the largest stretch of a grid edge. Ratios: drape / Bullet.\n\n",
+              "triangles meeting, the largest stretch of a grid edge; drape's steps retaken in parts for energy they\n"
+              "made (halvings, docs/solvers.md). Ratios: drape / Bullet.\n\n",
               CONTACT_DISTANCE * 100);
   for (const std::string& name : case_names) {
     Case c;
@@ -336,14 +354,18 @@ int main(int argc, char** argv) {
     c.self = name == "large-self";
     std::printf("%s: %d x %d nodes%s%s, %d frames\n", name.c_str(), c.nodes, c.nodes, c.speed > 0 ? ", at 100 m/s" : "",
                 c.self ? ", self-collision" : "", c.frames);
-    std::printf("  %-22s %10s %10s %9s %8s %8s %13s %8s   %s\n", "side", "falling ms", "contact ms", "peak MiB", "in ball",
-                "in ground", "intersecting", "stretch", "ratio falling / contact");
+    std::printf("  %-28s %10s %10s %9s %8s %8s %13s %8s %8s   %s\n", "side", "falling ms", "contact ms", "peak MiB", "in ball",
+                "in ground", "intersecting", "stretch", "halvings", "ratio falling / contact");
     const Result bullet = in_child([&] { return run_bullet(c); });
     print_row("Bullet 3.24 soft body", bullet, nullptr);
-    for (const std::string& solver : solvers) {
-      const Result r = in_child([&] { return run_drape(c, solver); });
-      print_row("drape " + solver, r, &bullet);
-      if (solver == "projective" && r.ok) {
+    for (const std::string& solver : solvers)
+      for (const int steps : drape_steps) {
+        c.drape_steps = steps;
+        const Result r = in_child([&] { return run_drape(c, solver); });
+        char side[64];
+        std::snprintf(side, sizeof side, "drape %s, %d steps", solver.c_str(), steps);
+        print_row(side, r, &bullet);
+        if (solver != "projective" || !r.ok) continue;
         // In a child too: the parent must not start OpenMP or BLAS threads before it forks.
         const Result measured = in_child([&] {
           Result out;
@@ -353,22 +375,21 @@ int main(int argc, char** argv) {
         });
         const double limit = measured.ok ? measured.solve_ms_per_step : 0;
         const double solve_ratio = limit > 0 ? r.solve_ms_per_step / limit : 0.0;
-        std::printf("  %-22s solve a step %.2f ms, one prefactored back-substitution %.3f ms: %.1fx\n", "", r.solve_ms_per_step,
+        std::printf("  %-28s solve a step %.2f ms, one prefactored back-substitution %.3f ms: %.1fx\n", "", r.solve_ms_per_step,
                     limit, solve_ratio);
         // Issue 17's targets, from this run's figures.
         const auto met = [](bool ok) { return ok ? "met" : "not met"; };
         const bool fast_enough = bullet.ok && r.falling_ms > 0 && r.contact_ms > 0 && r.falling_ms <= 0.5 * bullet.falling_ms &&
                                  r.contact_ms <= 0.5 * bullet.contact_ms;
         if (name == "small")
-          std::printf("  %-22s target: at most 0.5x Bullet's ms a frame, nothing inside the sphere, no intersecting "
+          std::printf("  %-28s target: at most 0.5x Bullet's ms a frame, nothing inside the sphere, no intersecting "
                       "triangles: %s\n", "", met(fast_enough && r.inside_sphere == 0 && r.intersecting_frames == 0));
         if (name == "large") {
-          std::printf("  %-22s target: at most 0.5x Bullet's ms a frame: %s\n", "", met(fast_enough));
-          std::printf("  %-22s target: the solve a step within 5x of one back-substitution: %s\n", "",
+          std::printf("  %-28s target: at most 0.5x Bullet's ms a frame: %s\n", "", met(fast_enough));
+          std::printf("  %-28s target: the solve a step within 5x of one back-substitution: %s\n", "",
                       met(solve_ratio > 0 && solve_ratio <= 5));
         }
       }
-    }
     std::printf("\n");
   }
   return 0;
