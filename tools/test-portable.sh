@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# Builds drape with the CCD kernels for Highway's portable one-lane target alone (no SIMD
+# Builds drape with the CCD kernels and the spring pass for Highway's portable one-lane target alone (no SIMD
 # instructions compiled: -DDRAPE_PORTABLE_KERNELS=ON) in ${BUILD_DIR:-build-portable} and runs the
 # whole test suite, so the guarantees never rest on the SSE4, AVX2 or AVX-512 code paths.
 set -euo pipefail
