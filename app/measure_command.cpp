@@ -1,8 +1,10 @@
 // drape measure: the textile laboratory's measurements on a run's saved frames, the Cusick
 // drape test and the cantilever bending test (core/textile.h).
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <iostream>
+#include <string>
 
 #include "commands.h"
 #include "drape/core/mesh_io.h"
@@ -48,16 +50,29 @@ int measure_cusick_test(const MeasureArguments& args, const Model& model, int fr
               << e.what() << "\n";
     return EXIT_BAD_INPUT;
   }
+  const Scalar threshold = NODE_PROMINENCE * setup.fabric_radius;
   if (args.json) {
+    std::string depths;
+    for (const Scalar d : r.node_depths) {
+      char number[32];
+      std::snprintf(number, sizeof number, "%.5f", double(d));
+      depths += (depths.empty() ? "" : ", ") + std::string(number);
+    }
     std::printf("{\"frame\": %d, \"fabric_radius_m\": %.6g, \"support_radius_m\": %.6g, \"shadow_area_m2\": %.6g, "
-                "\"drape_coefficient\": %.4f, \"nodes\": %d}\n",
+                "\"drape_coefficient\": %.4f, \"nodes\": %d, \"node_depths_m\": [%s], \"node_threshold_m\": %.5f}\n",
                 frame, double(setup.fabric_radius), double(setup.support_radius), double(r.shadow_area),
-                double(r.drape_coefficient), r.nodes);
+                double(r.drape_coefficient), r.nodes, depths.c_str(), double(threshold));
   } else {
     std::printf("%s, frame %d: Cusick drape coefficient %.4f, %d nodes (shadow %.2f cm^2; fabric disc radius %.2f cm%s, "
                 "support %.2f cm)\n",
                 args.folder.c_str(), frame, double(r.drape_coefficient), r.nodes, double(r.shadow_area) * 1e4,
                 double(setup.fabric_radius) * 100, args.fabric_radius > 0 ? "" : " from frame 0", double(setup.support_radius) * 100);
+    if (!r.node_depths.empty()) {
+      std::printf("  node depths, cm, around the axis:");
+      for (const Scalar d : r.node_depths) std::printf(" %.2f", double(d) * 100);
+      std::printf(" (a node from %.2f cm; the shallowest %.2f cm)\n", double(threshold) * 100,
+                  double(*std::min_element(r.node_depths.begin(), r.node_depths.end())) * 100);
+    }
   }
   return EXIT_OK;
 }
@@ -161,7 +176,9 @@ Command add_measure_command(CLI::App& app) {
       "(shadow - support disc) / (fabric disc - support disc): 1 for a cloth that stays flat, 0\n"
       "for one that hangs straight down. Nodes: the folds, peaks of the shadow's outline around\n"
       "the axis (smoothed over 5 degrees) that rise 3 % of the fabric radius above the troughs\n"
-      "beside them. The axis passes through the cloth's centre at frame 0.\n\n"
+      "beside them; each node's depth is printed (how far it rises above the higher of the two),\n"
+      "so a count that hangs on a node near the threshold shows. The axis passes through the\n"
+      "cloth's centre at frame 0.\n\n"
       "cantilever (Peirce; ASTM D1388): one strip, held at one end by a handle (the clamp), its\n"
       "free end overhanging. The tip's drop since frame 0 gives the bending length c, the heavy\n"
       "elastica's for that drop (solved numerically), and the flexural rigidity w g c^3; for a\n"

@@ -13,24 +13,39 @@ namespace {
 constexpr int MAX_CELLS_PER_SIDE = 8192;
 
 // Peaks of a circular signal that rise and fall by at least prominence on both sides: a
-// hysteresis walk from its lowest point around the circle and back.
-int count_peaks(const std::vector<Scalar>& s, Scalar prominence) {
+// hysteresis walk from its lowest point around the circle and back. Each peak's depth is the
+// lesser of its rise from the lowest point since the peak before and its fall to the lowest
+// point before the next one.
+std::vector<Scalar> peak_depths(const std::vector<Scalar>& s, Scalar prominence) {
   const std::size_t n = s.size();
   const std::size_t start = std::size_t(std::min_element(s.begin(), s.end()) - s.begin());
   bool rising = true;
-  Scalar trough = s[start], peak = s[start];
-  int peaks = 0;
+  Scalar trough = s[start], peak = s[start], before = s[start];  // before: the trough the peak rose from
+  bool falling_from_counted = false;  // a counted peak whose fall is still being followed
+  Scalar counted_peak = 0, counted_rise = 0;
+  std::vector<Scalar> depths;
+  const auto close = [&] {
+    depths.push_back(std::min(counted_rise, counted_peak - trough));
+    falling_from_counted = false;
+  };
   for (std::size_t k = 1; k <= n; ++k) {
     const Scalar x = s[(start + k) % n];
     if (rising) {
       trough = std::min(trough, x);
-      if (x - trough >= prominence) rising = false, peak = x;
+      if (x - trough >= prominence) {
+        if (falling_from_counted) close();
+        rising = false, peak = x, before = trough;
+      }
     } else {
       peak = std::max(peak, x);
-      if (peak - x >= prominence) ++peaks, rising = true, trough = x;
+      if (peak - x >= prominence) {
+        falling_from_counted = true, counted_peak = peak, counted_rise = peak - before;
+        rising = true, trough = x;
+      }
     }
   }
-  return peaks;  // the walk ends on the lowest point: a peak still open has fallen to it
+  if (falling_from_counted) close();  // the walk ends on the lowest point: the last peak's fall
+  return depths;
 }
 
 }  // namespace
@@ -91,7 +106,8 @@ CusickResult measure_cusick(const std::vector<Vec3>& positions, const std::vecto
     for (int k = -OUTLINE_SMOOTHING; k <= OUTLINE_SMOOTHING; ++k) smooth[std::size_t(i)] += r.outline[std::size_t((i + k + OUTLINE_BINS) % OUTLINE_BINS)];
     smooth[std::size_t(i)] /= 2 * OUTLINE_SMOOTHING + 1;
   }
-  r.nodes = count_peaks(smooth, NODE_PROMINENCE * setup.fabric_radius);
+  r.node_depths = peak_depths(smooth, NODE_PROMINENCE * setup.fabric_radius);
+  r.nodes = int(r.node_depths.size());
   return r;
 }
 

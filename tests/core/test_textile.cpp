@@ -78,12 +78,47 @@ TEST(Cusick, SixLobesAreSixNodesAndTheirAreaIsExact) {
     EXPECT_NEAR(r.shadow_area / area, 1.0, 2e-3) << slanted;
     EXPECT_NEAR(r.drape_coefficient, (area - M_PI * SUPPORT * SUPPORT) / (M_PI * (FABRIC * FABRIC - SUPPORT * SUPPORT)), 3e-3);
     EXPECT_EQ(r.nodes, 6) << slanted;
+    // Each node 0.04 m deep, less the smoothing over 5 degrees each side (sin 30 deg / (pi / 6)).
+    ASSERT_EQ(r.node_depths.size(), 6u);
+    for (const Scalar depth : r.node_depths) EXPECT_NEAR(depth / (0.04 * 0.5 / (M_PI / 6)), 1.0, 0.02) << slanted;
   }
   const Mesh ripples = polar_mesh([](Scalar f, Scalar a) {
     const Scalar r = f * (0.12 + 0.001 * std::cos(6 * a));
     return Vec3(r * std::cos(a), r * std::sin(a), 0);
   });
   EXPECT_EQ(measure_cusick(ripples.x, ripples.t, {}).nodes, 0);
+}
+
+// r = 0.12 + 0.02 cos 6a + 0.006 cos 3a: six nodes, alternately deeper and shallower by twice
+// the small wave (smoothed): about 0.0441 and 0.0323 m, in that order from a = 0.
+TEST(Cusick, ANodesDepthIsItsRiseAboveTheTroughsBesideIt) {
+  const Mesh m = polar_mesh([](Scalar f, Scalar a) {
+    const Scalar r = f * (0.12 + 0.02 * std::cos(6 * a) + 0.006 * std::cos(3 * a));
+    return Vec3(r * std::cos(a), r * std::sin(a), 0);
+  });
+  const CusickResult r = measure_cusick(m.x, m.t, {});
+  ASSERT_EQ(r.nodes, 6);
+  ASSERT_EQ(r.node_depths.size(), 6u);
+  const Scalar smooth6 = 0.5 / (M_PI / 6), smooth3 = std::sin(M_PI / 12) / (M_PI / 12);  // over +-5 degrees
+  const Scalar deep = 0.04 * smooth6 + 0.006 * smooth3, shallow = 0.04 * smooth6 - 0.006 * smooth3;
+  int deeper = 0, shallower = 0;
+  for (std::size_t k = 0; k < 6; ++k) {
+    const Scalar d = r.node_depths[k], next = r.node_depths[(k + 1) % 6];
+    if (std::abs(d / deep - 1) < 0.03) ++deeper;
+    if (std::abs(d / shallow - 1) < 0.03) ++shallower;
+    EXPECT_GT(std::abs(d - next), 0.5 * (deep - shallow)) << "nodes " << k << " and " << (k + 1) % 6 << " alternate";
+  }
+  EXPECT_EQ(deeper, 3);
+  EXPECT_EQ(shallower, 3);
+  // r = 0.12 + 0.02 cos 6a + 0.006 sin 3a: equal peaks between troughs alternately 0.006 higher
+  // and lower: each node's depth is its rise above the higher trough, 2 x 0.02 - 0.006 (smoothed).
+  const Mesh lopsided = polar_mesh([](Scalar f, Scalar a) {
+    const Scalar r = f * (0.12 + 0.02 * std::cos(6 * a) + 0.006 * std::sin(3 * a));
+    return Vec3(r * std::cos(a), r * std::sin(a), 0);
+  });
+  const CusickResult l = measure_cusick(lopsided.x, lopsided.t, {});
+  ASSERT_EQ(l.node_depths.size(), 6u);
+  for (const Scalar d : l.node_depths) EXPECT_NEAR(d / shallow, 1.0, 0.03);
 }
 
 TEST(Cusick, ADegenerateSetupIsRefused) {

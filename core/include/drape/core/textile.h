@@ -26,6 +26,10 @@ struct CusickResult {
   Scalar shadow_area = 0;            ///< m^2: the area of the cloth's projection along down
   Scalar drape_coefficient = 0;      ///< (shadow - support disc) / (fabric disc - support disc): 1 flat, 0 hanging straight
   int nodes = 0;                     ///< folds: peaks of the shadow's outline around the axis
+  /// m, a node each, in order around the axis: how far its smoothed outline rises above the
+  /// troughs beside it (the lesser side). A count that hangs on a node near NODE_PROMINENCE
+  /// times the fabric radius is one a slightly different drape may change.
+  std::vector<Scalar> node_depths;
   std::vector<Scalar> outline;       ///< m: the shadow's outermost radius in each of OUTLINE_BINS directions
 };
 
