@@ -14,7 +14,8 @@
 // shares no code with either side's collision handling), the largest stretch of a grid edge.
 //
 // drape may take fewer steps a frame than Bullet's 8 where its results stay correct (issue 17):
-// --drape-steps lists the counts to run, each a row of its own, checked the same way.
+// --drape-steps lists the counts to run, each a row of its own, checked the same way, with its
+// halvings (a step that made energy taken again in parts: log2 of the kept attempt's parts).
 //
 //   peer_bench [--cases small,fast,large,large-self] [--solvers projective,cholmod] [--drape-steps 8,2]
 //              [--frames 120] [--large-frames 20]
@@ -70,7 +71,7 @@ struct Result {
   long under_ground = 0;                  // vertex-frames below z = 0
   int intersecting_frames = 0;            // frames with cloth triangles meeting (not sharing a vertex)
   double max_stretch = 1;                 // grid edges (axis-aligned in the rest grid)
-  long halvings = -1;                     // drape: steps retaken in parts for energy they made (-1: not drape)
+  long halvings = -1;                     // drape: StepReport::step_halvings summed (-1: not drape)
   long peak_kib = 0;
 };
 
@@ -342,8 +343,9 @@ int main(int argc, char** argv) {
               "thread. ms a frame: medians over the frames before any vertex is within %.0f cm of the sphere or the\n"
               "ground (falling) and after (contact).\n"
               "Checks over every frame: vertex-frames inside the sphere and under the ground, frames with cloth\n"
-              "triangles meeting, the largest stretch of a grid edge; drape's steps retaken in parts for energy they\n"
-              "made (halvings, docs/solvers.md). Ratios: drape / Bullet.\n\n",
+              "triangles meeting, the largest stretch of a grid edge; drape's halvings (a step that made energy is\n"
+              "taken again in 2, 4, ... parts: log2 of the kept attempt's parts, summed; docs/solvers.md). Ratios:\n"
+              "drape / Bullet.\n\n",
               CONTACT_DISTANCE * 100);
   for (const std::string& name : case_names) {
     Case c;

@@ -257,7 +257,8 @@ Scalar ProjectiveSolver::evaluate(const std::vector<Vec3>& x, Block* gradient) {
     std::vector<Vec3>& g = gradient_rows_;
     g.resize(std::size_t(free_count_));
     if (arena_->max_concurrency() == 1) {
-      // One thread: the same sums in the same order in one pass, without tasks.
+      // One thread: the same sums in the same order, without tasks or stored pulls (each
+      // chunk's pulls go straight to their vertices).
       Scalar vertex_total = 0, spring_total = 0, block = 0;
       for (std::size_t v = 0; v < vertices; ++v) {
         if (v > 0 && v % PARALLEL_GRAIN == 0) vertex_total += block, block = 0;

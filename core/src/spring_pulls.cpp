@@ -2,7 +2,8 @@
 // foreach_target.h compiles this file once per instruction set, HWY_EXPORT tables the kernel
 // and HWY_DYNAMIC_DISPATCH calls the best one the machine runs. Every operation is the scalar
 // formula's (projective.cpp, evaluate) on the same operands in the same order: -ffp-contract=off
-// and no MulAdd, the 3-term sums as (a + b) + c like Eigen's for a Vec3.
+// and no MulAdd, the 3-term sums as (a + b) + c like Eigen's for a Vec3 on its vectorised path
+// (spring_pulls.h).
 #undef HWY_TARGET_INCLUDE
 #define HWY_TARGET_INCLUDE "spring_pulls.cpp"
 #include <hwy/foreach_target.h>  // IWYU pragma: keep
@@ -52,6 +53,8 @@ namespace drape {
 HWY_EXPORT(SpringPulls);
 
 void spring_pulls(const SpringPullInput& in, const SpringPullOutput& out) { HWY_DYNAMIC_DISPATCH(SpringPulls)(in, out); }
+
+std::vector<std::int64_t> spring_pull_targets() { return hwy::SupportedAndGeneratedTargets(); }
 
 }  // namespace drape
 #endif  // HWY_ONCE

@@ -2,6 +2,8 @@
 // Internal to core/: the projective solver's springs, many at a time (spring_pulls.cpp).
 
 #include <cstddef>
+#include <cstdint>
+#include <vector>
 
 namespace drape {
 
@@ -27,7 +29,13 @@ inline constexpr std::size_t SPRING_LANES = 8;
 /// length), and the energy h^2 k (|z| - r)^2 / 2 + h c ((z - z0) . d0)^2 / 2: the damping
 /// along the direction at the step's start (docs/solvers.md). The vectors of the widest
 /// instruction set the machine runs (Highway), each operation the scalar formula's in its
-/// order, so every instruction set gives the same bits (no fused multiply-add).
+/// order, so every instruction set gives the same bits (no fused multiply-add; a Vec3's sums
+/// as (a + b) + c, Eigen's order on its vectorised path, which SSE2 and NEON give every build
+/// here; tests/core/test_spring_pulls.cpp compares them with Eigen compiled the same way).
 void spring_pulls(const SpringPullInput& in, const SpringPullOutput& out);
+
+/// The instruction sets spring_pulls was compiled for that this machine runs, best first, as
+/// Highway's target bits (for the tests: hwy::SetSupportedTargetsForTest chooses one).
+std::vector<std::int64_t> spring_pull_targets();
 
 }  // namespace drape
