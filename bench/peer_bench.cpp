@@ -67,6 +67,7 @@ struct Result {
   double falling_ms = 0, contact_ms = 0;  // medians over the frames of each kind (0: none)
   int falling_frames = 0, contact_frames = 0;
   double solve_ms_per_step = 0;           // drape: median solve time a step
+  double falling_solve_ms = 0, contact_solve_ms = 0;  // drape: the same over the steps of each kind of frame (0: none)
   long inside_sphere = 0;                 // vertex-frames inside the ball
   long under_ground = 0;                  // vertex-frames below z = 0
   int intersecting_frames = 0;            // frames with cloth triangles meeting (not sharing a vertex)
@@ -136,12 +137,14 @@ Result run_drape(const Case& c, const std::string& solver) {
   const Model check = check_model(model);
   State state = initial_state(model);
   Integrator integrator(model);
-  std::vector<double> falling, contact, solve;
+  std::vector<double> falling, contact, solve, falling_solve, contact_solve, frame_solve;
   for (int frame = 1; frame <= c.frames; ++frame) {
     const auto begin = std::chrono::steady_clock::now();
+    frame_solve.clear();
     for (int k = 0; k < c.drape_steps; ++k) {
       const StepReport r = integrator.step(state);
       solve.push_back(r.solve_ms);
+      frame_solve.push_back(r.solve_ms);
       result.halvings += r.step_halvings;
       if (!r.ok) {
         std::snprintf(result.failure, sizeof result.failure, "frame %d: %s", frame, r.failure.c_str());
@@ -150,12 +153,17 @@ Result run_drape(const Case& c, const std::string& solver) {
       }
     }
     const double ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - begin).count();
-    (in_contact(state.positions) ? contact : falling).push_back(ms);
+    const bool touching = in_contact(state.positions);
+    (touching ? contact : falling).push_back(ms);
+    std::vector<double>& kind = touching ? contact_solve : falling_solve;
+    kind.insert(kind.end(), frame_solve.begin(), frame_solve.end());
     check_frame(check, state.positions, c.nodes, result);
     result.frames = frame;
   }
   summarise(falling, contact, result);
   result.solve_ms_per_step = ccd::median(solve);
+  result.falling_solve_ms = falling_solve.empty() ? 0 : ccd::median(falling_solve);
+  result.contact_solve_ms = contact_solve.empty() ? 0 : ccd::median(contact_solve);
   result.ok = true;
   return result;
 }
@@ -377,8 +385,10 @@ int main(int argc, char** argv) {
         });
         const double limit = measured.ok ? measured.solve_ms_per_step : 0;
         const double solve_ratio = limit > 0 ? r.solve_ms_per_step / limit : 0.0;
-        std::printf("  %-28s solve a step %.2f ms, one prefactored back-substitution %.3f ms: %.1fx\n", "", r.solve_ms_per_step,
-                    limit, solve_ratio);
+        std::printf("  %-28s solve a step %.2f ms, one prefactored back-substitution %.3f ms: %.1fx (steps of falling "
+                    "frames %.1fx, of contact frames %.1fx)\n",
+                    "", r.solve_ms_per_step, limit, solve_ratio, limit > 0 ? r.falling_solve_ms / limit : 0.0,
+                    limit > 0 ? r.contact_solve_ms / limit : 0.0);
         // Issue 17's targets, from this run's figures.
         const auto met = [](bool ok) { return ok ? "met" : "not met"; };
         const bool fast_enough = bullet.ok && r.falling_ms > 0 && r.contact_ms > 0 && r.falling_ms <= 0.5 * bullet.falling_ms &&
@@ -388,8 +398,10 @@ int main(int argc, char** argv) {
                       "triangles: %s\n", "", met(fast_enough && r.inside_sphere == 0 && r.intersecting_frames == 0));
         if (name == "large") {
           std::printf("  %-28s target: at most 0.5x Bullet's ms a frame: %s\n", "", met(fast_enough));
-          std::printf("  %-28s target: the solve a step within 5x of one back-substitution: %s\n", "",
-                      met(solve_ratio > 0 && solve_ratio <= 5));
+          const double contact_ratio = limit > 0 ? r.contact_solve_ms / limit : 0.0;
+          std::printf("  %-28s target: the solve a step within 5x of one back-substitution: %s over every step, %s "
+                      "over the contact frames' steps\n",
+                      "", met(solve_ratio > 0 && solve_ratio <= 5), met(contact_ratio > 0 && contact_ratio <= 5));
         }
       }
     std::printf("\n");
