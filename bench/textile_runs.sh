@@ -5,8 +5,9 @@
 #   disc_30cm_12mm.obj, 12 rings, 469 vertices; disc_30cm.obj, 25 rings, 1,951 vertices;
 #   disc_30cm_3mm.obj, 50 rings, 7,651 vertices), each run in full (2 s) with the independent
 #   penetration check (--check): the drape coefficient and nodes at the last frame (and at
-#   frame 40, to show how settled it is), and the coefficient's change from each resolution
-#   to the next;
+#   frame 40, to show how settled it is; with the shallowest node's depth, to show a count that
+#   hangs on the 0.45 cm threshold), and the coefficient's change from each resolution to the
+#   next;
 # - the cantilever test (scenes/cantilever.json's strip) with each preset: measured / elastica.
 # The source of the presets publishes no Cusick figures for them: the table says so.
 # Prints one line per preset and exits 1 when a run fails or finds an intersection. Long
@@ -42,9 +43,13 @@ scene_with() {
     -e "s|\"mesh\": \"meshes/|\"mesh\": \"$ROOT/scenes/meshes/|" "scenes/$1.json"
 }
 
-# "coefficient nodes" of a run's frame.
+# "coefficient nodes shallowest" of a run's frame: the shallowest node's depth in cm ("-" for
+# no node; a count that hangs on a node near the 0.45 cm threshold shows there).
 measure() {
-  "$DRAPE" measure cusick "$1" --frame "$2" --json | sed -E 's/.*"drape_coefficient": ([0-9.-]+), "nodes": ([0-9]+).*/\1 \2/'
+  "$DRAPE" measure cusick "$1" --frame "$2" --json |
+    sed -E 's/.*"drape_coefficient": ([0-9.-]+), "nodes": ([0-9]+), "node_depths_m": \[([^]]*)\].*/\1 \2 \3/' |
+    awk '{ low = ""; for (i = 3; i <= NF; ++i) { d = $i; sub(",", "", d); if (low == "" || d + 0 < low + 0) low = d }
+           printf "%s %s %s\n", $1, $2, (low == "" ? "-" : sprintf("%.2f", 100 * low)) }'
 }
 
 MESHES=${MESHES:-disc_30cm_12mm.obj disc_30cm.obj disc_30cm_3mm.obj}
@@ -52,7 +57,7 @@ SPECIMENS=${SPECIMENS:-1}
 TILT=${TILT:-0.5}
 [[ "$SPECIMENS" =~ ^[1-9][0-9]*$ && "$TILT" =~ ^[0-9]+(\.[0-9]+)?$ ]] ||
   { echo "textile_runs.sh: expected SPECIMENS of 1 or more and TILT in degrees (a number)" >&2; exit 2; }
-cusick_heading="DC (at frame 40) nodes, seconds"
+cusick_heading="DC (at frame 40) nodes (the shallowest node's depth), seconds"
 [ "$SPECIMENS" -gt 1 ] && cusick_heading="$SPECIMENS specimens tilted $TILT degrees: mean DC, spread, nodes, seconds"
 printf "%-19s | %s | %-8s | %-6s | %-11s | %s\n" preset "Cusick per mesh ($MESHES; compression ${COMPRESSION:-1}): $cusick_heading" \
   "DC changes" "pen" "cantilever" "published DC, nodes"
@@ -80,23 +85,23 @@ for preset in $PRESETS; do
         failed=1
         continue
       fi
-      read -r dc nodes < <(measure "$run" 60)
-      read -r dc40 _ < <(measure "$run" 40)
+      read -r dc nodes shallowest < <(measure "$run" 60)
+      read -r dc40 _ _ < <(measure "$run" 40)
       if ! [[ "$dc" =~ ^-?[0-9.]+$ && "$dc40" =~ ^-?[0-9.]+$ && "$nodes" =~ ^[0-9]+$ ]]; then
         echo "$preset on $mesh: drape measure cusick failed" >&2
         failed=1
         continue
       fi
       pen=$((pen + $(awk -F, 'NR == 1 { for (i = 1; i <= NF; ++i) c[$i] = i; next } { p += $c["penetrations"] } END { print p + 0 }' "$run/stats.csv")))
-      values+=("$dc $dc40 $nodes")
+      values+=("$dc $dc40 $nodes $shallowest")
     done
     seconds=$(awk -v a="$start" -v b="$(date +%s%N)" 'BEGIN { printf "%.0f", (b - a) / 1e9 }')
     if [ "${#values[@]}" -ne "$SPECIMENS" ]; then
       cells+=("failed")
       last+=("")
     elif [ "$SPECIMENS" -eq 1 ]; then
-      read -r dc dc40 nodes <<< "${values[0]}"
-      cells+=("$(printf "%.3f (%.3f) %d, %s s" "$dc" "$dc40" "$nodes" "$seconds")")
+      read -r dc dc40 nodes shallowest <<< "${values[0]}"
+      cells+=("$(printf "%.3f (%.3f) %d (shallowest %s cm), %s s" "$dc" "$dc40" "$nodes" "$shallowest" "$seconds")")
       last+=("$dc")
     else
       mean=$(printf "%s\n" "${values[@]}" | awk '{ s += $1 } END { printf "%.4f", s / NR }')
