@@ -52,8 +52,9 @@ ProjectiveSolver::ProjectiveSolver(const Model& model, std::vector<int> free_ind
     spring_ends_.push_back({s.i, s.j, free_index_[std::size_t(s.i)], free_index_[std::size_t(s.j)]});
   const std::size_t padded = padded_springs();
   SpringArrays& arrays = spring_arrays_;
+  for (std::vector<double>* v : {&arrays.rest, &arrays.sy, &arrays.sz, &arrays.d0y, &arrays.d0z}) v->assign(padded, 0);
   for (std::vector<double>* v : {&arrays.sx, &arrays.d0x}) v->assign(padded, 1);
-  for (std::vector<double>* v : {&arrays.sy, &arrays.sz, &arrays.d0y, &arrays.d0z}) v->assign(padded, 0);
+  for (std::size_t k = 0; k < model.springs.size(); ++k) arrays.rest[k] = model.springs[k].rest_length;
   spring_chunk_ = std::make_unique<SpringChunk>();
   incidence_.resize(std::size_t(incidence_start_.back()));
   std::vector<int> filled(incidence_start_.begin(), incidence_start_.end() - 1);
@@ -92,14 +93,9 @@ ProjectiveSolver::System* ProjectiveSolver::system(Scalar h, std::string& error)
       }
   }
   System sys;
-  sys.springs.reserve(m.springs.size());
-  for (const Spring& s : m.springs)
-    sys.springs.push_back({s.i, s.j, free_index_[std::size_t(s.i)], free_index_[std::size_t(s.j)], s.rest_length,
-                           h * h * s.stiffness, h * s.damping});
-  const std::size_t padded = padded_springs();
-  sys.rest.assign(padded, 0), sys.elastic.assign(padded, 0), sys.viscous.assign(padded, 0);
-  for (std::size_t k = 0; k < sys.springs.size(); ++k)
-    sys.rest[k] = sys.springs[k].rest, sys.elastic[k] = sys.springs[k].elastic, sys.viscous[k] = sys.springs[k].viscous;
+  sys.elastic.assign(padded_springs(), 0), sys.viscous.assign(padded_springs(), 0);
+  for (std::size_t k = 0; k < m.springs.size(); ++k)
+    sys.elastic[k] = h * h * m.springs[k].stiffness, sys.viscous[k] = h * m.springs[k].damping;
   sys.matrix.resize(free_count_, free_count_);
   sys.matrix.setFromTriplets(entries.begin(), entries.end());  // duplicates summed
   sys.matrix.makeCompressed();
@@ -127,15 +123,12 @@ bool ProjectiveSolver::solve(const ProjectiveStep& step, std::vector<Vec3>& posi
   System* sys = system(h, error);
   if (!sys) return false;
   const CholmodFactor* factor = &sys->factor;
-  spring_start_.resize(sys->springs.size());
-  spring_direction_.resize(sys->springs.size());
   SpringArrays& arrays = spring_arrays_;
-  for (std::size_t k = 0; k < sys->springs.size(); ++k) {
-    const Vec3 z0 = x0[std::size_t(sys->springs[k].i)] - x0[std::size_t(sys->springs[k].j)];
-    spring_start_[k] = z0;
-    spring_direction_[k] = z0.norm() > 0 ? Vec3(z0.normalized()) : Vec3::UnitX();
+  for (std::size_t k = 0; k < spring_ends_.size(); ++k) {
+    const Vec3 z0 = x0[std::size_t(spring_ends_[k].i)] - x0[std::size_t(spring_ends_[k].j)];
+    const Vec3 d0 = z0.norm() > 0 ? Vec3(z0.normalized()) : Vec3::UnitX();
     arrays.sx[k] = z0.x(), arrays.sy[k] = z0.y(), arrays.sz[k] = z0.z();
-    arrays.d0x[k] = spring_direction_[k].x(), arrays.d0y[k] = spring_direction_[k].y(), arrays.d0z[k] = spring_direction_[k].z();
+    arrays.d0x[k] = d0.x(), arrays.d0y[k] = d0.y(), arrays.d0z[k] = d0.z();
   }
 
   // The right-hand side's constant part: M y + h a M (x0 + h w) and the held vertices' pull.
@@ -208,21 +201,23 @@ Scalar ProjectiveSolver::evaluate(const std::vector<Vec3>& x, Block* gradient) {
   // at the step's start, with the pull on its end i (the gradient's part; -pull on j) and the
   // local step's weighted target (rest length along the current direction d, p = r d; z less
   // its change along d0, q = z - ((z - z0) . d0) d0).
+  const SpringArrays& arrays = spring_arrays_;
   const auto spring = [&](std::size_t k, Vec3& pull, Vec3& target) {
-    const SpringTerm& s = sys.springs[k];
-    const Vec3 z = x[std::size_t(s.i)] - x[std::size_t(s.j)];
+    const SpringEnds& e = spring_ends_[k];
+    const Scalar elastic = sys.elastic[k], viscous = sys.viscous[k], rest = arrays.rest[k];
+    const Vec3 z = x[std::size_t(e.i)] - x[std::size_t(e.j)];
     const Scalar length = z.norm();
-    // A spring of zero length has no direction: its start's, or any. (One division, not
-    // three: the loop waited on them.)
-    const Vec3 d = length > 0 ? Vec3(z * (1 / length)) : spring_direction_[k];
     // The damping acts along the spring's direction at the step's start (as the reference
     // solver's does): q is z's projection onto a fixed plane, so the iteration never raises
     // the objective.
-    const Vec3& d0 = spring_direction_[k];
-    const Scalar along = (z - spring_start_[k]).dot(d0);
-    pull = s.elastic * (length - s.rest) * d + s.viscous * along * d0;
-    target = (s.elastic * s.rest) * d + s.viscous * (z - along * d0);
-    return 0.5 * s.elastic * (length - s.rest) * (length - s.rest) + 0.5 * s.viscous * along * along;
+    const Vec3 d0(arrays.d0x[k], arrays.d0y[k], arrays.d0z[k]), z0(arrays.sx[k], arrays.sy[k], arrays.sz[k]);
+    // A spring of zero length has no direction: its start's, or any. (One division, not
+    // three: the loop waited on them.)
+    const Vec3 d = length > 0 ? Vec3(z * (1 / length)) : d0;
+    const Scalar along = (z - z0).dot(d0);
+    pull = elastic * (length - rest) * d + viscous * along * d0;
+    target = (elastic * rest) * d + viscous * (z - along * d0);
+    return 0.5 * elastic * (length - rest) * (length - rest) + 0.5 * viscous * along * along;
   };
   // The vertices' part of the objective: inertia, the air's damping.
   const auto vertex = [&](std::size_t v, int a, Vec3& grad) {
@@ -236,8 +231,7 @@ Scalar ProjectiveSolver::evaluate(const std::vector<Vec3>& x, Block* gradient) {
     // L-BFGS: the springs' pulls and energies many at a time (spring_pulls, the formula
     // above's bits), then each free vertex's term and its springs' pulls in the model's order,
     // and the energies summed by fixed blocks in order: the same bits for any thread count.
-    const std::size_t springs = sys.springs.size(), vertices = x.size();
-    const SpringArrays& a = spring_arrays_;
+    const std::size_t springs = spring_ends_.size(), vertices = x.size();
     // The springs [begin, end) of one chunk (begin a multiple of SPRING_CHUNK): z gathered into
     // the chunk's arrays (the padding a spring along x of unit length), their pulls and
     // energies out into them.
@@ -249,9 +243,10 @@ Scalar ProjectiveSolver::evaluate(const std::vector<Vec3>& x, Block* gradient) {
         c.zx[k] = z.x(), c.zy[k] = z.y(), c.zz[k] = z.z();
       }
       for (std::size_t k = count; k < padded; ++k) c.zx[k] = 1, c.zy[k] = 0, c.zz[k] = 0;
-      spring_pulls({c.zx.data(), c.zy.data(), c.zz.data(), a.sx.data() + begin, a.sy.data() + begin, a.sz.data() + begin,
-                    a.d0x.data() + begin, a.d0y.data() + begin, a.d0z.data() + begin, sys.rest.data() + begin,
-                    sys.elastic.data() + begin, sys.viscous.data() + begin, padded},
+      spring_pulls({c.zx.data(), c.zy.data(), c.zz.data(), arrays.sx.data() + begin, arrays.sy.data() + begin,
+                    arrays.sz.data() + begin, arrays.d0x.data() + begin, arrays.d0y.data() + begin,
+                    arrays.d0z.data() + begin, arrays.rest.data() + begin, sys.elastic.data() + begin,
+                    sys.viscous.data() + begin, padded},
                    {c.px.data(), c.py.data(), c.pz.data(), c.energy.data()});
     };
     std::vector<Vec3>& g = gradient_rows_;
@@ -328,11 +323,11 @@ Scalar ProjectiveSolver::evaluate(const std::vector<Vec3>& x, Block* gradient) {
         Vec3 grad;
         total += vertex(v, a, grad);
       }
-    for (std::size_t k = 0; k < sys.springs.size(); ++k) {
-      const SpringTerm& s = sys.springs[k];
+    for (std::size_t k = 0; k < spring_ends_.size(); ++k) {
+      const SpringEnds& s = spring_ends_[k];
       Vec3 pull, target;
       total += spring(k, pull, target);
-      const Scalar weight = s.elastic + s.viscous;
+      const Scalar weight = sys.elastic[k] + sys.viscous[k];
       if (s.a >= 0) sums_[std::size_t(s.a)] += s.b >= 0 ? target : Vec3(target + weight * x[std::size_t(s.j)]);
       if (s.b >= 0) sums_[std::size_t(s.b)] += s.a >= 0 ? Vec3(-target) : Vec3(weight * x[std::size_t(s.i)] - target);
     }

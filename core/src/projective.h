@@ -106,19 +106,12 @@ class ProjectiveSolver {
 
  private:
   using Block = Eigen::Matrix<Scalar, Eigen::Dynamic, 3>;
-  // A spring's constants for one step size: its weights in the objective.
-  struct SpringTerm {
-    int i = 0, j = 0;        // vertices
-    int a = -1, b = -1;      // their free indices, or -1
-    Scalar rest = 0;         // rest length
-    Scalar elastic = 0;      // h^2 k
-    Scalar viscous = 0;      // h c
-  };
   struct System {
     SparseMatrix matrix;
     CholmodFactor factor{CholmodFactor::Use::ManySolves};
-    std::vector<SpringTerm> springs;
-    std::vector<double> rest, elastic, viscous;  // the springs' as arrays, padded (spring_pulls.h)
+    // The springs' weights in the objective for this step size, h^2 k and h c, padded with
+    // zeros (spring_pulls.h).
+    std::vector<double> elastic, viscous;
   };
   // The system of step size h, built and factorised on first use.
   System* system(Scalar h, std::string& error);
@@ -217,24 +210,22 @@ class ProjectiveSolver {
   std::vector<int> diagonal_offset_;   // free vertex -> offset of its diagonal entry in a system's values
   std::vector<Vec3> base_, sums_;  // per free vertex: the constant right-hand side, and each pass's
   std::vector<Vec3> predicted_;    // per free vertex: the inertial prediction y
-  std::vector<Vec3> spring_start_;      // per spring: x_i - x_j at the step's start
-  std::vector<Vec3> spring_direction_;  // and its direction (any, for a spring of zero length)
   Block rhs_, solution_;
   Block gradient_, trial_gradient_, direction_;  // L-BFGS, over the free vertices (gradients projected)
   Block raw_gradient_;                           // the last iterate's gradient before projecting
   std::vector<Vec3> gradient_rows_;
-  // L-BFGS's evaluation: each spring's ends (global and free indices), its direction and
-  // length at the step's start as arrays (spring_pulls.h; padded with a spring along x of unit
-  // length), and a chunk of springs at a time through spring_pulls (z gathered, pulls and
-  // energies out; small enough to stay in the first-level cache); on several threads each
-  // spring's pull; each vertex's energy, and each free vertex's springs (2 k for spring k's
-  // end i, 2 k + 1 for j).
+  // Each spring's ends (global and free indices); its rest length, and x_i - x_j at the step's
+  // start and its direction there (any, for a spring of zero length), as arrays (spring_pulls.h;
+  // padded with a spring along x of unit length at rest). L-BFGS's evaluation takes a chunk of
+  // springs at a time through spring_pulls (z gathered, pulls and energies out; small enough
+  // to stay in the first-level cache); on several threads each spring's pull; each vertex's
+  // energy, and each free vertex's springs (2 k for spring k's end i, 2 k + 1 for j).
   struct SpringEnds {
     int i = 0, j = 0, a = -1, b = -1;
   };
   std::vector<SpringEnds> spring_ends_;
   struct SpringArrays {
-    std::vector<double> sx, sy, sz, d0x, d0y, d0z;
+    std::vector<double> rest, sx, sy, sz, d0x, d0y, d0z;
   } spring_arrays_;
   static constexpr std::size_t SPRING_CHUNK = 256;  // divides PARALLEL_GRAIN, a multiple of SPRING_LANES
   struct SpringChunk {
