@@ -20,6 +20,7 @@ void CollisionCounters::add(const CollisionCounters& o) {
   ee_tests += o.ee_tests;
   ccd_hits += o.ccd_hits;
   proximity_impulses += o.proximity_impulses;
+  held_self_contacts += o.held_self_contacts;
   rest_clamped_pairs += o.rest_clamped_pairs;
   impulse_iterations += o.impulse_iterations;
   impact_zones += o.impact_zones;
@@ -85,13 +86,13 @@ CollisionPipeline::Impl::Impl(const Model& m, const CollisionSettings& s) : mode
 }
 
 ccd::Candidates CollisionPipeline::Impl::candidates(Scalar margin, CollisionCounters& counters, bool self,
-                                                    std::span<const std::uint8_t> moved) {
+                                                    std::span<const std::uint8_t> moved, bool with_obstacles) {
   const auto begin = Clock::now();
   ccd::Candidates all;
   const bool self_pairs = self && model.scene.collisions.self;
   const bool culling = self_pairs && model.scene.collisions.self_culling;
   // The cloth's btDbvt serves the mesh obstacles, and self-collision without culling.
-  if (!obstacles.empty() || (self_pairs && !culling)) {
+  if ((with_obstacles && !obstacles.empty()) || (self_pairs && !culling)) {
     boxes.resize(cloth_triangles.size());
     for (std::size_t i = 0; i < cloth_triangles.size(); ++i) boxes[i] = ccd::swept_box(cloth_triangles[i], start, end, margin);
     cloth_tree.update(boxes);
@@ -136,6 +137,7 @@ ccd::Candidates CollisionPipeline::Impl::candidates(Scalar margin, CollisionCoun
     append(cloth_triangles, cloth_owners, cloth_tree.self_pairs());
   }
   for (MeshObstacle& mo : obstacles) {
+    if (!with_obstacles) break;
     std::vector<ccd::Aabb> obstacle_boxes(mo.triangles.size());
     for (std::size_t i = 0; i < mo.triangles.size(); ++i) obstacle_boxes[i] = ccd::swept_box(mo.triangles[i], start, end, margin);
     mo.tree.update(obstacle_boxes);

@@ -30,7 +30,7 @@ std::vector<SolveContact> CollisionPipeline::mesh_contacts(const std::vector<Vec
   std::sort(c.vertex_face.begin(), c.vertex_face.end(), [&](const auto& a, const auto& b) { return vf_key(a) < vf_key(b); });
   std::sort(c.edge_edge.begin(), c.edge_edge.end(), [&](const auto& a, const auto& b) { return ee_key(a) < ee_key(b); });
   // Per cloth feature (its vertices), its nearest obstacle points in distinct directions.
-  std::map<std::array<int, 3>, std::vector<std::pair<Scalar, SolveContact>>> near;
+  std::map<std::array<int, 4>, std::vector<std::pair<Scalar, SolveContact>>> near;
   const auto free = [&](int v) { return v < m.cloth_vertices && m.inverse_mass[std::size_t(v)] > 0; };
   const auto velocity = [&](int v) -> Vec3 { return (m.end[v] - m.start[v]) / h; };
   // offset: from the obstacle's point to the cloth's; obstacle_velocity: of the obstacle's point.
@@ -41,7 +41,7 @@ std::vector<SolveContact> CollisionPipeline::mesh_contacts(const std::vector<Vec
     contact.distance = distance;
     contact.surface_velocity = obstacle_velocity;
     contact.target = contact.normal.dot(obstacle_velocity);
-    std::array<int, 3> key = contact.vertex;
+    std::array<int, 4> key = contact.vertex;
     std::sort(key.begin(), key.end());
     auto& list = near[key];
     for (auto& [d, known] : list)
@@ -59,13 +59,13 @@ std::vector<SolveContact> CollisionPipeline::mesh_contacts(const std::vector<Vec
     const Scalar wb = closest.weight_b, wc = closest.weight_c, wa = 1 - wb - wc;
     SolveContact contact;
     if (free(p.vertex)) {  // a cloth vertex and an obstacle's triangle
-      contact.vertex = {p.vertex, -1, -1};
-      contact.weight = {1, 0, 0};
+      contact.vertex = {p.vertex, -1, -1, -1};
+      contact.weight = {1, 0, 0, 0};
       add(contact, x[p.vertex] - closest.point, wa * velocity(f[0]) + wb * velocity(f[1]) + wc * velocity(f[2]));
     } else if (p.vertex >= m.cloth_vertices && free(f[0]) && free(f[1]) && free(f[2]) && inner(wa) && inner(wb) &&
                inner(wc)) {  // an obstacle's vertex and a cloth triangle
-      contact.vertex = {f[0], f[1], f[2]};
-      contact.weight = {wa, wb, wc};
+      contact.vertex = {f[0], f[1], f[2], -1};
+      contact.weight = {wa, wb, wc, 0};
       contact.count = 3;
       add(contact, closest.point - x[p.vertex], velocity(p.vertex));
     }
@@ -75,8 +75,8 @@ std::vector<SolveContact> CollisionPipeline::mesh_contacts(const std::vector<Vec
     const auto closest = ccd::closest_segment_segment<Scalar>(x[p.edge_a[0]], x[p.edge_a[1]], x[p.edge_b[0]], x[p.edge_b[1]]);
     if (!inner(closest.s) || !inner(closest.u)) continue;  // a vertex's contact, found as such
     SolveContact contact;
-    contact.vertex = {p.edge_a[0], p.edge_a[1], -1};
-    contact.weight = {1 - closest.s, closest.s, 0};
+    contact.vertex = {p.edge_a[0], p.edge_a[1], -1, -1};
+    contact.weight = {1 - closest.s, closest.s, 0, 0};
     contact.count = 2;
     add(contact, closest.point_a - closest.point_b,
         (1 - closest.u) * velocity(p.edge_b[0]) + closest.u * velocity(p.edge_b[1]));
@@ -99,6 +99,56 @@ std::vector<SolveContact> CollisionPipeline::mesh_contacts(const std::vector<Vec
       for (int i = 0; i < contact.count && covered; ++i) covered = has_own(contact.vertex[i], contact.normal);
       if (!covered) out.push_back(contact);
     }
+  return out;
+}
+
+std::vector<SolveContact> CollisionPipeline::self_contacts(const std::vector<Vec3>& start, Scalar reach,
+                                                           CollisionCounters& counters) {
+  Impl& m = *impl_;
+  std::vector<SolveContact> out;
+  if (!m.model.scene.collisions.self) return out;
+  for (int v = 0; v < m.cloth_vertices; ++v) m.start[v] = m.end[v] = start[v];
+  const Scalar thickness = m.model.scene.collisions.thickness;
+  const ccd::Candidates c = m.candidates(reach * thickness, counters, true, {}, false);
+  const auto free = [&](int v) { return v < m.cloth_vertices && m.inverse_mass[std::size_t(v)] > 0; };
+  std::vector<std::pair<Contact, Scalar>> near;  // and its distance
+  const auto add = [&](bool vertex_face, Contact contact, const Vec3& offset) {
+    if (!std::all_of(contact.vertex.begin(), contact.vertex.end(), free)) return;  // a pinned side is the response's
+    const Scalar distance = offset.norm();
+    if (!(distance < reach * thickness) || !(distance > 0)) return;
+    if (!(distance < reach * m.kept_gap(vertex_face, contact.vertex, counters))) return;
+    contact.vertex_face = vertex_face;
+    contact.normal = offset / distance;
+    near.emplace_back(contact, distance);
+  };
+  const auto& x = m.start;
+  for (const auto& p : c.vertex_face) {
+    const auto closest = ccd::closest_point_triangle<Scalar>(x[p.vertex], x[p.face[0]], x[p.face[1]], x[p.face[2]]);
+    Contact contact;
+    contact.vertex = {p.vertex, p.face[0], p.face[1], p.face[2]};
+    contact.weight = {1, -(1 - closest.weight_b - closest.weight_c), -closest.weight_b, -closest.weight_c};
+    add(true, contact, x[p.vertex] - closest.point);
+  }
+  for (const auto& p : c.edge_edge) {
+    const auto closest = ccd::closest_segment_segment<Scalar>(x[p.edge_a[0]], x[p.edge_a[1]], x[p.edge_b[0]], x[p.edge_b[1]]);
+    Contact contact;
+    contact.vertex = {p.edge_a[0], p.edge_a[1], p.edge_b[0], p.edge_b[1]};
+    contact.weight = {1 - closest.s, closest.s, -(1 - closest.u), -closest.u};
+    add(false, contact, closest.point_a - closest.point_b);
+  }
+  // The tests come unsorted (feature_pairs' owners): the contacts in a whole round's order.
+  std::sort(near.begin(), near.end(), [&](const auto& a, const auto& b) { return m.listed_before(a.first, b.first); });
+  out.reserve(near.size());
+  for (const auto& [n, distance] : near) {
+    SolveContact contact;
+    contact.vertex = n.vertex;
+    contact.weight = n.weight;
+    contact.count = 4;
+    contact.normal = n.normal;
+    contact.distance = distance;
+    contact.self = true;
+    out.push_back(contact);
+  }
   return out;
 }
 

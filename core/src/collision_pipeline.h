@@ -81,10 +81,11 @@ struct CollisionPipeline::Impl {
   explicit Impl(const Model& m, const CollisionSettings& s);
 
   // Candidate elementary tests for the motion start -> end, boxes grown by margin; the cloth
-  // against itself too when self-collision is on and self is asked for; with moved (a flag per
-  // vertex), only the tests with a moved vertex.
+  // against itself too when self-collision is on and self is asked for, against the mesh
+  // obstacles unless obstacles is false; with moved (a flag per vertex), only the tests with a
+  // moved vertex.
   ccd::Candidates candidates(Scalar margin, CollisionCounters& counters, bool self = true,
-                             std::span<const std::uint8_t> moved = {});
+                             std::span<const std::uint8_t> moved = {}, bool obstacles = true);
 
   // The mesh obstacles' vertices at t (start) and t + h (end).
   void pose_obstacles(Scalar t, Scalar h) {

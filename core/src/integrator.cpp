@@ -38,6 +38,14 @@ Integrator::Integrator(const Model& model, int threads) : model_(model), work_(s
     return;
   }
   solver_ = make_linear_solver(model.scene.solver);
+  build_pattern({});
+  w.rhs.setZero(3 * w.free_count);
+  w.solution.setZero(3 * w.free_count);
+}
+
+void Integrator::build_pattern(const std::vector<std::pair<int, int>>& extra) {
+  const Model& model = model_;
+  Workspace& w = *work_;
   std::vector<Eigen::Triplet<Scalar>> pattern;
   const auto add_pattern = [&](int a, int b) {
     for (int r = 0; r < 3; ++r)
@@ -48,6 +56,7 @@ Integrator::Integrator(const Model& model, int threads) : model_(model), work_(s
     const int a = w.free_index[s.i], b = w.free_index[s.j];
     if (a >= 0 && b >= 0) add_pattern(a, b), add_pattern(b, a);
   }
+  for (const auto& [a, b] : extra) add_pattern(a, b), add_pattern(b, a);
   for (const Hinge& hinge : model.hinges)
     for (std::size_t i = 0; i < 4; ++i)
       for (std::size_t j = 0; j < 4; ++j) {
@@ -73,8 +82,7 @@ Integrator::Integrator(const Model& model, int threads) : model_(model), work_(s
         const int a = w.free_index[model.hinges[k].v[i]], b = w.free_index[model.hinges[k].v[j]];
         if (a >= 0 && b >= 0 && model.hinges[k].k[i] != 0 && model.hinges[k].k[j] != 0) w.hinge_blocks[k][i][j] = w.block(a, b);
       }
-  w.rhs.setZero(3 * w.free_count);
-  w.solution.setZero(3 * w.free_count);
+  w.extra_blocks = extra;
 }
 
 int Integrator::analyses() const { return projective_ ? projective_->analyses() : solver_->analyses(); }
@@ -141,7 +149,7 @@ StepReport Integrator::advance(State& state) {
     air_forces = w.forces;
     for (int v = 0; v < n; ++v) air_forces[v] -= m.masses[v] * m.scene.gravity;
   }
-  if (m.scene.solver.kind == SolverKind::Cholmod || (projective_ && m.scene.solver.history > 0)) find_contacts(state);
+  if (m.scene.solver.kind == SolverKind::Cholmod || (projective_ && m.scene.solver.history > 0)) find_contacts(state, report);
   else w.contacts.clear();
   if (!(projective_ ? solve_projective(state, pinned_dv, report) : solve_linearised(state, pinned_dv, report)))
     return report;
@@ -275,15 +283,15 @@ void add_sphere_face_contacts(const Model& m, const PosedShape& shape, Scalar t,
 
 }  // namespace
 
-void Integrator::find_contacts(const State& state) {
+void Integrator::find_contacts(const State& state, StepReport& report) {
   const Model& m = model_;
   Workspace& w = *work_;
   const Scalar h = h_;
   w.contacts.clear();
-  if (!m.scene.collisions.obstacles) return;
   const Scalar thickness = m.scene.collisions.thickness;
   const Scalar reach = CONTACT_REACH * thickness;
   for (const Obstacle& obstacle : m.obstacles) {
+    if (!m.scene.collisions.obstacles) break;
     if (obstacle.spec.kind == ObstacleSpec::Kind::Mesh) continue;
     const PosedShape shape = pose_shape(obstacle, state.time);
     for (std::size_t v = 0; v < state.positions.size(); ++v) {
@@ -291,8 +299,8 @@ void Integrator::find_contacts(const State& state) {
       if (!(shape.distance(state.positions[v]).first < reach)) continue;
       const SurfaceContact c = analytic_contact(shape, state.time, state.positions[v]);
       SolveContact contact;
-      contact.vertex = {int(v), -1, -1};
-      contact.weight = {1, 0, 0};
+      contact.vertex = {int(v), -1, -1, -1};
+      contact.weight = {1, 0, 0, 0};
       contact.normal = c.normal;
       contact.surface_velocity = c.surface_velocity;
       contact.target = c.normal.dot(c.surface_velocity);
@@ -301,16 +309,47 @@ void Integrator::find_contacts(const State& state) {
     }
     if (shape.sphere) add_sphere_face_contacts(m, shape, state.time, state.positions, w.free_index, reach, w.contacts);
   }
-  if (collisions_) {
+  if (collisions_ && m.scene.collisions.obstacles) {
     const auto mesh = collisions_->mesh_contacts(state.positions, state.time, h, reach);
     w.contacts.insert(w.contacts.end(), mesh.begin(), mesh.end());
   }
   if (projective_) return;  // its contacts are terms of its objective, not blocks of a matrix
-  // Each contact's place in the matrix: the blocks joining its vertices. A contact whose
-  // vertices the matrix does not join (no spring between them) keeps its heaviest vertex alone.
+  // The cloth's contacts with itself, held as the obstacles' are: the two sides' relative
+  // velocity along the normal may not close within the step (the response's proximity impulses
+  // ask the same after the solve, where stopping one side strains its springs to neighbours the
+  // solve moved on). Their blocks join vertices no spring joins: the matrix's pattern gains them.
+  if (collisions_ && m.scene.collisions.self && m.scene.collisions.self_in_solve) {
+    const std::size_t first = w.contacts.size();
+    const auto self = collisions_->self_contacts(state.positions, CONTACT_REACH, report.collisions);
+    report.collisions.held_self_contacts += long(self.size());
+    w.contacts.insert(w.contacts.end(), self.begin(), self.end());
+    std::vector<std::pair<int, int>> needed;
+    bool missing = false;
+    for (std::size_t k = first; k < w.contacts.size(); ++k)
+      for (int i = 0; i < 4; ++i)
+        for (int j = i + 1; j < 4; ++j) {
+          int a = w.free_index[std::size_t(w.contacts[k].vertex[i])], b = w.free_index[std::size_t(w.contacts[k].vertex[j])];
+          if (a == b) continue;
+          if (a > b) std::swap(a, b);
+          needed.emplace_back(a, b);
+          missing = missing || !w.find_block(a, b);
+        }
+    if (missing) {
+      // The pairs of earlier contacts stay in the pattern (a cloth at rest keeps its contacts,
+      // and each new pattern is analysed again) until they outnumber the current ones.
+      if (w.extra_blocks.size() <= EXTRA_BLOCKS_KEPT * needed.size())
+        needed.insert(needed.end(), w.extra_blocks.begin(), w.extra_blocks.end());
+      std::sort(needed.begin(), needed.end());
+      needed.erase(std::unique(needed.begin(), needed.end()), needed.end());
+      build_pattern(needed);
+    }
+  }
+  // Each contact's place in the matrix: the blocks joining its vertices. An obstacle's contact
+  // whose vertices the matrix does not join (no spring between them) keeps its heaviest vertex
+  // alone.
   w.contact_blocks.clear();
   for (SolveContact& c : w.contacts) {
-    std::array<std::array<std::array<int, 3>, 3>, 3> blocks{};
+    Workspace::ContactBlocks blocks{};
     bool joined = true;
     for (int i = 0; i < c.count && joined; ++i)
       for (int j = 0; j < c.count && joined; ++j) {
@@ -321,8 +360,8 @@ void Integrator::find_contacts(const State& state) {
       }
     if (!joined) {
       const int heaviest = int(std::max_element(c.weight.begin(), c.weight.begin() + c.count) - c.weight.begin());
-      c.vertex = {c.vertex[heaviest], -1, -1};
-      c.weight = {1, 0, 0};
+      c.vertex = {c.vertex[heaviest], -1, -1, -1};
+      c.weight = {1, 0, 0, 0};
       c.count = 1;
       blocks[0][0] = w.diagonal[w.free_index[std::size_t(c.vertex[0])]];
     }

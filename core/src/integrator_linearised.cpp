@@ -169,7 +169,7 @@ bool Integrator::solve_linearised(State& state, const std::vector<Vec3>& pinned_
     Scalar scale = 0;
     for (int i = 0; i < w.contacts[k].count; ++i)
       scale = std::max(scale, w.scale[std::size_t(w.free_index[std::size_t(w.contacts[k].vertex[i])])]);
-    w.contact_holds[k] = RESPONSE_HOLD * scale;
+    w.contact_holds[k] = (w.contacts[k].self ? SELF_CONTACT_HOLD : RESPONSE_HOLD) * scale;
   }
   std::vector<char> held(w.contacts.size(), 1);
   hold_contacts(1, held);
@@ -203,10 +203,10 @@ bool Integrator::solve_linearised(State& state, const std::vector<Vec3>& pinned_
   for (const Friction& f : frictions)
     w.contact_work += (f.pushed - f.block * w.solution.segment<3>(3 * w.free_index[std::size_t(f.vertex)])).dot(f.surface);
   w.contact_work = std::max<Scalar>(0, w.contact_work);
-  // The normal forces, for the next step's friction.
+  // The normal forces of the obstacles' contacts, for the next step's friction.
   w.normal_force.assign(std::size_t(n), 0);
   for (std::size_t k = 0; k < w.contacts.size(); ++k)
-    for (int i = 0; i < w.contacts[k].count; ++i)
+    for (int i = 0; i < w.contacts[k].count && !w.contacts[k].self; ++i)
       w.normal_force[std::size_t(w.contacts[k].vertex[i])] += w.contacts[k].weight[i] * w.contact_impulses[k] / h;
 
   // Velocities; the motion of the step starts as the same velocities.

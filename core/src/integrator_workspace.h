@@ -18,6 +18,13 @@ namespace drape {
 // the response is spread through the implicit system: its diagonal block's largest entry times
 // this, added to the block, so it follows its target to about 1 / RESPONSE_HOLD of its change.
 inline constexpr Scalar RESPONSE_HOLD = 1e8;
+// The penalty that holds a contact of the cloth with itself in the linearised solve, times the
+// largest diagonal entry of its vertices (as RESPONSE_HOLD): it leaves about a thousandth of the
+// two sides' approach, which the response's proximity impulses then take. Its pushes are equal
+// and opposite, but the solve keeps the momentum only to rounding, and that rounding grows
+// with the penalty: two layers stopped by 1e8 changed their momentum by 2 %, by 1e3 by 4e-7
+// (SelfContactsInTheSolve); the pile's first 30 frames ran alike from 1e2 to 1e8.
+inline constexpr Scalar SELF_CONTACT_HOLD = 1e3;
 // The linearised solve holds a cloth vertex against an obstacle (Integrator::find_contacts) when
 // it starts within this many thicknesses of it: a little more than one, since the response
 // leaves a resting vertex at the thickness.
@@ -30,6 +37,10 @@ inline constexpr Scalar NEGLIGIBLE_MOTION = 1e-2;
 // m/s: a contact vertex slipping slower than this across its obstacle sticks (the friction in
 // Integrator::solve_linearised).
 inline constexpr Scalar FRICTION_SLIP = 1e-4;
+// The matrix's pattern keeps the blocks of earlier self contacts while they are at most this
+// many times the current contacts' (Integrator::find_contacts); beyond, it is built again from
+// the current ones.
+inline constexpr std::size_t EXTRA_BLOCKS_KEPT = 4;
 // The projective solve keeps the cloth this many thicknesses from spheres and planes: a held
 // contact yields a little (its penalty's force needs a depth), and within this margin it
 // yields outside the thickness, where the response after the solve has nothing to do.
@@ -71,7 +82,9 @@ struct Integrator::Workspace {
   // The contacts the linearised solve keeps, and the impulse (N s, along the normal) each
   // applied; zero for the ones released.
   std::vector<SolveContact> contacts;
-  std::vector<std::array<std::array<std::array<int, 3>, 3>, 3>> contact_blocks;  // [contact][i][j]: block (vertex i, vertex j)
+  using ContactBlocks = std::array<std::array<std::array<int, 3>, 4>, 4>;
+  std::vector<ContactBlocks> contact_blocks;  // [contact][i][j]: block (vertex i, vertex j)
+  std::vector<std::pair<int, int>> extra_blocks;  // free vertex pairs (a < b) the pattern joins for self contacts
   std::vector<Scalar> contact_holds, contact_impulses;
   std::vector<char> contact_held;  // per contact: neither released nor found pulling in the solve
   std::vector<Scalar> assembled;   // the matrix's values before the contacts' penalties and friction
@@ -119,12 +132,13 @@ struct Integrator::Workspace {
   }
 };
 
-// Each vertex's contact of largest weight among contacts (-1: none), for its friction.
+// Each vertex's obstacle contact of largest weight among contacts (-1: none), for its friction
+// (the cloth's contacts with itself have theirs in the response).
 inline std::vector<int> strongest_contacts(const std::vector<SolveContact>& contacts, int n) {
   std::vector<int> strongest(std::size_t(n), -1);
   std::vector<Scalar> weight(std::size_t(n), 0);
   for (std::size_t k = 0; k < contacts.size(); ++k)
-    for (int i = 0; i < contacts[k].count; ++i) {
+    for (int i = 0; i < contacts[k].count && !contacts[k].self; ++i) {
       const std::size_t v = std::size_t(contacts[k].vertex[i]);
       if (contacts[k].weight[i] > weight[v]) weight[v] = contacts[k].weight[i], strongest[v] = int(k);
     }

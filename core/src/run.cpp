@@ -66,6 +66,7 @@ const std::vector<StatsColumn>& stats_columns() {
       {"impulse_iterations", [](S s) { return integer(s.collisions.impulse_iterations); }},
       {"impact_zones", [](S s) { return integer(s.collisions.impact_zones); }},
       {"proximity_impulses", [](S s) { return integer(s.collisions.proximity_impulses); }},
+      {"held_self_contacts", [](S s) { return integer(s.collisions.held_self_contacts); }},
       {"rest_clamped_pairs", [](S s) { return integer(s.collisions.rest_clamped_pairs); }},
       {"fail_safes", [](S s) { return integer(s.collisions.fail_safes); }, EXACT},
       {"ccd_ms", [](S s) { return milliseconds(s.collisions.ccd_ms); }, TIMING},

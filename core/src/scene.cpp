@@ -288,7 +288,7 @@ Scene parse_scene(const std::string& text, const std::filesystem::path& file) {
   if (n.has("collisions")) {
     const Node c = n.at("collisions");
     c.allow({"self", "obstacles", "thickness", "method", "max_impulse_iterations", "max_zone_iterations", "feature_boxes",
-             "self_culling"});
+             "self_culling", "self_in_solve"});
     if (c.has("self")) s.collisions.self = c.at("self").boolean();
     if (c.has("obstacles")) s.collisions.obstacles = c.at("obstacles").boolean();
     if (c.has("thickness")) s.collisions.thickness = c.at("thickness").number_in(0, MAX_THICKNESS, "from 0 to 1 (m)");
@@ -298,6 +298,7 @@ Scene parse_scene(const std::string& text, const std::filesystem::path& file) {
     if (c.has("max_zone_iterations")) s.collisions.max_zone_iterations = c.at("max_zone_iterations").integer_in(0, 1000);
     if (c.has("feature_boxes")) s.collisions.feature_boxes = c.at("feature_boxes").boolean();
     if (c.has("self_culling")) s.collisions.self_culling = c.at("self_culling").boolean();
+    if (c.has("self_in_solve")) s.collisions.self_in_solve = c.at("self_in_solve").boolean();
   }
   if (n.has("output")) {
     const Node o = n.at("output");

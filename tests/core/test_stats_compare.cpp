@@ -80,7 +80,7 @@ TEST(StatsColumns, HeaderRowsAndTolerancesComeFromOneTable) {
   EXPECT_EQ(stats_header(),
             "frame,sim_time,wall_ms,solve_ms,solver_iterations,kinetic_energy,potential_energy,max_stretch,"
             "min_distance_obstacle,obstacle_contacts,solver_warnings,bvh_pairs,culled_triangles,vf_tests,ee_tests,culled,separated,root_solves,"
-            "ccd_hits,impulse_iterations,impact_zones,proximity_impulses,rest_clamped_pairs,fail_safes,ccd_ms,broad_ms,narrow_ms,"
+            "ccd_hits,impulse_iterations,impact_zones,proximity_impulses,held_self_contacts,rest_clamped_pairs,fail_safes,ccd_ms,broad_ms,narrow_ms,"
             "response_ms,penetrations,external_work,energy_excess,step_halvings,strain_limited,strain_ms,warnings");
   FrameStats s;
   s.frame = 7, s.sim_time = 0.1, s.wall_ms = 12.34567, s.solve_ms = 0.5, s.solver_iterations = 42;
@@ -90,17 +90,17 @@ TEST(StatsColumns, HeaderRowsAndTolerancesComeFromOneTable) {
   s.warnings = 1;
   CollisionCounters& c = s.collisions;
   c.bvh_pairs = 100, c.culled_triangles = 99, c.vf_tests = 11, c.ee_tests = 12, c.tests.culled = 13, c.tests.separated = 14, c.tests.root_solves = 15;
-  c.ccd_hits = 16, c.impulse_iterations = 17, c.impact_zones = 18, c.proximity_impulses = 19, c.rest_clamped_pairs = 20;
+  c.ccd_hits = 16, c.impulse_iterations = 17, c.impact_zones = 18, c.proximity_impulses = 19, c.held_self_contacts = 23, c.rest_clamped_pairs = 20;
   c.fail_safes = 0, c.ccd_ms = 1.0005, c.broad_ms = 2, c.narrow_ms = 3, c.response_ms = 4;
   char expected[1024];
   std::snprintf(expected, sizeof expected,
-                "%d,%.17g,%.3f,%.3f,%ld,%.17g,%.17g,%.17g,%.17g,%d,%d,%ld,%ld,%ld,%ld,%llu,%llu,%llu,%ld,%ld,%ld,%ld,%ld,%ld,%.3f,%.3f,%.3f,%.3f,,"
+                "%d,%.17g,%.3f,%.3f,%ld,%.17g,%.17g,%.17g,%.17g,%d,%d,%ld,%ld,%ld,%ld,%llu,%llu,%llu,%ld,%ld,%ld,%ld,%ld,%ld,%ld,%.3f,%.3f,%.3f,%.3f,,"
                 "%.17g,%.17g,%d,%ld,%.3f,%d",
                 s.frame, s.sim_time, s.wall_ms, s.solve_ms, s.solver_iterations, s.kinetic_energy, s.potential_energy,
                 s.max_stretch, *s.min_distance_obstacle, s.obstacle_contacts, s.solver_warnings, c.bvh_pairs, c.culled_triangles, c.vf_tests,
                 c.ee_tests, static_cast<unsigned long long>(c.tests.culled), static_cast<unsigned long long>(c.tests.separated),
                 static_cast<unsigned long long>(c.tests.root_solves), c.ccd_hits, c.impulse_iterations, c.impact_zones,
-                c.proximity_impulses, c.rest_clamped_pairs, c.fail_safes, c.ccd_ms, c.broad_ms, c.narrow_ms, c.response_ms,
+                c.proximity_impulses, c.held_self_contacts, c.rest_clamped_pairs, c.fail_safes, c.ccd_ms, c.broad_ms, c.narrow_ms, c.response_ms,
                 s.external_work, s.energy_excess, s.step_halvings, s.strain_limited, s.strain_ms, s.warnings);
   EXPECT_EQ(stats_row(s), expected);
   s.penetrations = 5;

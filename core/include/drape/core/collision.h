@@ -50,6 +50,7 @@ struct CollisionCounters {
   long vf_tests = 0, ee_tests = 0;
   long ccd_hits = 0;            ///< collisions found, summed over rounds
   long proximity_impulses = 0;
+  long held_self_contacts = 0;  ///< the cloth's contacts with itself held in the implicit solve (collisions.self_in_solve)
   long rest_clamped_pairs = 0;  ///< proximity pairs whose gap the rest shape made smaller than the thickness
   long impulse_iterations = 0;  ///< CCD-impulse rounds that found collisions
   long impact_zones = 0;        ///< zones formed (counted each round)
@@ -80,16 +81,20 @@ constexpr Scalar INNER_WEIGHT = 0.01;
 /// the velocity along the contact's normal; here held by a penalty): the relative velocity of
 /// its cloth points, sum_k weight_k v_k over its cloth vertices (a vertex; an edge's two, by
 /// the closest point's weights; a triangle's three), along normal (unit, from the obstacle to
-/// the cloth) must reach at least target (m/s) at the step's end.
+/// the cloth) must reach at least target (m/s) at the step's end. A contact of the cloth with
+/// itself (`self`) has both sides' vertices, a vertex and a triangle's three or two edges' two,
+/// one side's weights negative: sum_k weight_k v_k is then the two points' relative velocity,
+/// which its normal (from the second side to the first) may not close.
 struct SolveContact {
-  std::array<int, 3> vertex{-1, -1, -1};
-  std::array<Scalar, 3> weight{};
+  std::array<int, 4> vertex{-1, -1, -1, -1};
+  std::array<Scalar, 4> weight{};
   int count = 1;  ///< cloth vertices in use
   Vec3 normal = Vec3::UnitZ();
   Scalar target = 0;
   Vec3 surface_velocity = Vec3::Zero();  ///< the obstacle's at the contact, for friction
   Scalar distance = 0;                   ///< m: between the cloth's point and the obstacle's at the step's start
-  bool analytic = false;                 ///< with a sphere or plane (else a mesh obstacle)
+  bool analytic = false;                 ///< with a sphere or plane (else a mesh obstacle or the cloth)
+  bool self = false;                     ///< the cloth with itself (no obstacle, no friction in the solve)
 };
 
 class CollisionPipeline {
@@ -107,6 +112,13 @@ class CollisionPipeline {
   /// inside it); for each cloth feature the nearest in each distinct direction (a rim gives
   /// the top's and the side's). Each may not approach the obstacle within the step.
   std::vector<SolveContact> mesh_contacts(const std::vector<Vec3>& start, Scalar t, Scalar h, Scalar reach);
+
+  /// The contacts of the cloth with itself at the step's start (self-collision on): each
+  /// vertex-face and edge-edge pair of free vertices closer than reach times the gap the
+  /// response keeps between them (the thickness, or the rest shape's share of it), the pairs the
+  /// response's proximity impulses act on, in a whole round's order. The broad phase's time
+  /// and pairs join counters.
+  std::vector<SolveContact> self_contacts(const std::vector<Vec3>& start, Scalar reach, CollisionCounters& counters);
 
   /// Whether the scene needs the pipeline at all (self-collision on, or mesh obstacles with
   /// obstacle collisions on): a scene pays only for what it asks for.

@@ -118,8 +118,13 @@ class Integrator {
                 std::vector<Vec3>* stiffness_times_v = nullptr, const std::vector<Vec3>* pinned_dv = nullptr,
                 std::vector<Vec3>* coupling = nullptr);
   // The contacts of the free cloth vertices with the obstacles at the state (the workspace's
-  // contacts), for the linearised solve to hold.
-  void find_contacts(const State& state);
+  // contacts), for the linearised solve to hold; with self-collision and the linearised solver,
+  // the cloth's contacts with itself too (their broad phase counted in report).
+  void find_contacts(const State& state, StepReport& report);
+  // The system matrix's pattern (the workspace's): the free vertices' diagonal blocks, the
+  // blocks the springs and hinges join, and extra pairs (a, b) of free vertices (both blocks);
+  // the offsets of the springs' and hinges' blocks found again.
+  void build_pattern(const std::vector<std::pair<int, int>>& extra);
   // Strain limiting after the solve (Provot 1995, on velocities as Bridson, Fedkiw and
   // Anderson 2002): each limited spring whose length at the step's end (positions + h motion)
   // would pass its limit gets equal and opposite changes of its ends' motion along it (by

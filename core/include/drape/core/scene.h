@@ -232,6 +232,10 @@ struct CollisionSpec {
   /// cost, and drops pairs inside such patches that never touch (their proximity repulsion, and
   /// near misses the narrow phase would report within its tolerance); never a contact.
   bool self_culling = true;
+  /// Self-collision with the linearised solver (`cholmod`): the cloth's contacts with itself at
+  /// the step's start held in the implicit solve, as the obstacles' are (their two sides'
+  /// approach along the normal stopped within the step), before the response's impulses.
+  bool self_in_solve = true;
 };
 
 struct OutputSpec {
