@@ -112,6 +112,15 @@ std::vector<SolveContact> CollisionPipeline::self_contacts(const std::vector<Vec
   const ccd::Candidates c = m.candidates(reach * thickness, counters, true, {}, false);
   const auto free = [&](int v) { return v < m.cloth_vertices && m.inverse_mass[std::size_t(v)] > 0; };
   std::vector<std::pair<Contact, Scalar>> near;  // and its distance
+  // A vertex over a triangle (its projection on the triangle's plane inside it, or within
+  // INNER_WEIGHT of its rim) is held along the triangle's normal, by the projection's weights
+  // (Bridson, Fedkiw and Anderson 2002, section 7.1); two edges only where their closest
+  // points lie inside both and they cross (their common perpendicular). A pair's closest
+  // points at a feature's rim give a normal tilted towards the rim, along which a layer
+  // sliding over another closes: held in the solve, such pairs stopped a cloth sliding on
+  // another at once, and left the vertices over the rims to the response, whose impulses the
+  // held ones then carried through the springs.
+  const auto inner = [](Scalar w) { return w > INNER_WEIGHT && w < 1 - INNER_WEIGHT; };
   const auto add = [&](bool vertex_face, Contact contact, const Vec3& offset) {
     if (!std::all_of(contact.vertex.begin(), contact.vertex.end(), free)) return;  // a pinned side is the response's
     const Scalar distance = offset.norm();
@@ -123,14 +132,30 @@ std::vector<SolveContact> CollisionPipeline::self_contacts(const std::vector<Vec
   };
   const auto& x = m.start;
   for (const auto& p : c.vertex_face) {
-    const auto closest = ccd::closest_point_triangle<Scalar>(x[p.vertex], x[p.face[0]], x[p.face[1]], x[p.face[2]]);
+    const Vec3 &a = x[p.face[0]], &b = x[p.face[1]], &f = x[p.face[2]];
+    const Vec3 across = (b - a).cross(f - a);
+    const Scalar twice_area = across.norm();
+    if (!(twice_area > 0)) continue;
+    const Vec3 unit = across / twice_area;
+    const Scalar height = (x[p.vertex] - a).dot(unit);
+    const Vec3 q = x[p.vertex] - height * unit;  // the projection
+    std::array<Scalar, 3> w{(b - q).cross(f - q).dot(unit) / twice_area, (f - q).cross(a - q).dot(unit) / twice_area, 0};
+    w[2] = 1 - w[0] - w[1];
+    if (!std::all_of(w.begin(), w.end(), [](Scalar v) { return v > -INNER_WEIGHT; })) continue;
+    Scalar sum = 0;
+    for (Scalar& v : w) sum += v = std::max<Scalar>(v, 0);
+    for (Scalar& v : w) v /= sum;
     Contact contact;
     contact.vertex = {p.vertex, p.face[0], p.face[1], p.face[2]};
-    contact.weight = {1, -(1 - closest.weight_b - closest.weight_c), -closest.weight_b, -closest.weight_c};
-    add(true, contact, x[p.vertex] - closest.point);
+    contact.weight = {1, -w[0], -w[1], -w[2]};
+    add(true, contact, height * unit);
   }
   for (const auto& p : c.edge_edge) {
     const auto closest = ccd::closest_segment_segment<Scalar>(x[p.edge_a[0]], x[p.edge_a[1]], x[p.edge_b[0]], x[p.edge_b[1]]);
+    if (!inner(closest.s) || !inner(closest.u)) continue;
+    const Vec3 da = x[p.edge_a[1]] - x[p.edge_a[0]], db = x[p.edge_b[1]] - x[p.edge_b[0]];
+    // Nearly parallel edges have no common perpendicular: their vertices' contacts hold them.
+    if (!(da.cross(db).squaredNorm() > SELF_EDGE_CROSSING * SELF_EDGE_CROSSING * da.squaredNorm() * db.squaredNorm())) continue;
     Contact contact;
     contact.vertex = {p.edge_a[0], p.edge_a[1], p.edge_b[0], p.edge_b[1]};
     contact.weight = {1 - closest.s, closest.s, -(1 - closest.u), -closest.u};

@@ -382,11 +382,14 @@ StepReport Integrator::step(State& state) {
   // The friction of every attempt starts from the normal forces the step before left; the
   // kept attempt's are the next step's.
   const std::vector<Scalar> normal_force_before = work_->normal_force;
+  const auto self_impulses_before = work_->self_impulses;
   std::vector<Scalar> kept_normal_force;
+  std::map<std::array<int, 5>, Scalar> kept_self_impulses;
   // The step's energy beyond its start and its sources' work, once taken as `parts` equal parts.
   const auto take = [&](State& s, int parts) {
     h_ = h / parts;
     work_->normal_force = normal_force_before;
+    work_->self_impulses = self_impulses_before;
     StepReport report = advance(s);
     for (int k = 1; k < parts && report.ok; ++k) report.add(advance(s));
     const Scalar potential = potential_energy(m, s);
@@ -396,6 +399,7 @@ StepReport Integrator::step(State& state) {
   };
   auto [report, excess] = take(state, 1);
   kept_normal_force = work_->normal_force;
+  kept_self_impulses = work_->self_impulses;
   // The step made energy no source put in (an impact whose response the step's size could not
   // spread: a stopped vertex strains its neighbours' springs in one step): taken again in 2,
   // 4, ... parts while that excess keeps falling by half at least (strain from one step's
@@ -414,6 +418,7 @@ StepReport Integrator::step(State& state) {
       spent.add(report);
       report = finer, excess = finer_excess, state = std::move(again);
       kept_normal_force = work_->normal_force;
+      kept_self_impulses = work_->self_impulses;
       report.step_halvings = 0;
       ++spent.step_halvings;
     } else {
@@ -422,6 +427,7 @@ StepReport Integrator::step(State& state) {
     if (!converging) break;
   }
   work_->normal_force = std::move(kept_normal_force);
+  work_->self_impulses = std::move(kept_self_impulses);
   // Counted once: the halvings of the kept attempt (log2 of its parts) and the work of all.
   const int halvings = spent.step_halvings;
   report.solve_ms += spent.solve_ms;

@@ -164,6 +164,41 @@ bool Integrator::solve_linearised(State& state, const std::vector<Vec3>& pinned_
     }
   }
 
+  // The same friction between the cloth's layers, on the two sides' relative slip across a
+  // contact's normal, from the normal impulse the same contact (its vertices) made the step
+  // before: its terms join the contact's vertices as its penalty does (equal and opposite).
+  if (mu > 0 && !w.self_impulses.empty())
+    for (std::size_t k = 0; k < w.contacts.size(); ++k) {
+      const SolveContact& c = w.contacts[k];
+      if (!c.self) continue;
+      const auto before = w.self_impulses.find(self_contact_key(c));
+      if (before == w.self_impulses.end()) continue;
+      const Mat3 across = Mat3::Identity() - c.normal * c.normal.transpose();
+      Vec3 relative = Vec3::Zero();
+      Scalar inverse_mass = 0;  // of the relative motion, sum w_i^2 / m_i
+      for (int i = 0; i < c.count; ++i) {
+        relative += c.weight[i] * state.velocities[std::size_t(c.vertex[i])];
+        inverse_mass += c.weight[i] * c.weight[i] / m.masses[std::size_t(c.vertex[i])];
+      }
+      const Vec3 slip = across * relative;
+      const Scalar force = mu * before->second / h, speed = slip.norm();
+      Mat3 block;
+      Vec3 pushed;
+      if (h * force * inverse_mass >= speed) {  // it can stop the slip within the step: a drag
+        const Scalar drag = force / std::max(speed, FRICTION_SLIP);
+        block = h * drag * across;
+        pushed = -h * drag * slip;
+      } else {
+        const Vec3 direction = slip / speed;
+        block = h * force / speed * (across - direction * direction.transpose());
+        pushed = -h * force * direction;
+      }
+      for (int i = 0; i < c.count; ++i) {
+        w.rhs.segment<3>(3 * w.free_index[std::size_t(c.vertex[i])]) += c.weight[i] * pushed;
+        for (int j = 0; j < c.count; ++j) w.add_block(w.contact_blocks[k][i][j], c.weight[i] * c.weight[j] * block);
+      }
+    }
+
   w.contact_holds.assign(w.contacts.size(), 0);
   for (std::size_t k = 0; k < w.contacts.size(); ++k) {
     Scalar scale = 0;
@@ -203,6 +238,10 @@ bool Integrator::solve_linearised(State& state, const std::vector<Vec3>& pinned_
   for (const Friction& f : frictions)
     w.contact_work += (f.pushed - f.block * w.solution.segment<3>(3 * w.free_index[std::size_t(f.vertex)])).dot(f.surface);
   w.contact_work = std::max<Scalar>(0, w.contact_work);
+  // The normal impulses of the cloth's contacts with itself, for the next step's friction.
+  w.self_impulses.clear();
+  for (std::size_t k = 0; k < w.contacts.size(); ++k)
+    if (w.contacts[k].self && w.contact_impulses[k] > 0) w.self_impulses.emplace(self_contact_key(w.contacts[k]), w.contact_impulses[k]);
   // The normal forces of the obstacles' contacts, for the next step's friction.
   w.normal_force.assign(std::size_t(n), 0);
   for (std::size_t k = 0; k < w.contacts.size(); ++k)

@@ -6,6 +6,8 @@
 /// step and spread).
 
 #include <algorithm>
+#include <array>
+#include <map>
 #include <memory>
 #include <vector>
 
@@ -97,6 +99,9 @@ struct Integrator::Workspace {
   std::vector<Scalar> scale;  // per free vertex: its diagonal block's largest entry before penalties
   Scalar contact_work = 0;           // J: what the held contacts did at moving obstacles in the last solve
   std::vector<Scalar> normal_force;  // per vertex, N: what its contacts pushed with in the last solve
+  // N s: what each of the cloth's contacts with itself pushed with in the last solve (those that
+  // pushed), by self_contact_key, for the next step's friction between the layers.
+  std::map<std::array<int, 5>, Scalar> self_impulses;
 
   std::array<int, 3> block(int a, int b) const {
     std::array<int, 3> offsets{};
@@ -131,6 +136,12 @@ struct Integrator::Workspace {
       for (int j = 0; j < c.count; ++j) add_block(contact_blocks[k][i][j], hold * c.weight[i] * c.weight[j] * nn);
   }
 };
+
+// A contact of the cloth with itself, the same from step to step: its vertices and its kind
+// (a vertex and a face have one positive weight, two edges two).
+inline std::array<int, 5> self_contact_key(const SolveContact& c) {
+  return {c.vertex[0], c.vertex[1], c.vertex[2], c.vertex[3], c.weight[1] < 0 ? 0 : 1};
+}
 
 // Each vertex's obstacle contact of largest weight among contacts (-1: none), for its friction
 // (the cloth's contacts with itself have theirs in the response).

@@ -124,4 +124,39 @@ TEST(SelfContactsInTheSolve, ClothWithNoContactWithItselfRunsBitForBitAsWithoutT
   EXPECT_EQ(a.velocities, b.velocities);
 }
 
+// A 20 cm cloth lying on a 60 cm one (at the thickness) that lies on the ground, thrown along
+// it at 1 m/s: Coulomb friction between the layers (friction 0.5) stops it within
+// v^2 / (2 mu g) = 10.2 cm; without friction it slides on. The contacts between the layers are
+// held in the solve, so the friction is the solve's too (the response, with nothing left to
+// stop, gives none).
+Scalar slid(Scalar friction) {
+  std::ostringstream s;
+  s.precision(17);
+  s << R"({"frame_time": 0.02, "frame_steps": 5, "friction": )" << friction << R"(, "cloths": [
+      {"grid": {"size": [0.6, 0.6], "resolution": [10, 10]}, "transform": {"translate": [0, 0, 0.005]}},
+      {"grid": {"size": [0.2, 0.2], "resolution": [10, 10]}, "transform": {"translate": [0, 0, 0.0101]}, "velocity": [1, 0, 0]}],
+    "obstacles": [{"plane": {}}], "collisions": {"self": true, "thickness": 0.005}, "solver": {"type": "cholmod"}})";
+  const Model model = build_model(parse_scene(s.str(), "slide.json"));
+  State state = initial_state(model);
+  Integrator integrator(model);
+  long held = 0;
+  for (int step = 0; step < 75; ++step) {  // 0.3 s
+    const StepReport r = integrator.step(state);
+    EXPECT_TRUE(r.ok) << r.failure;
+    held += r.collisions.held_self_contacts;
+  }
+  EXPECT_GT(held, 0);
+  EXPECT_EQ(find_penetrations(model, state.positions, state.time).size(), 0u);
+  const std::size_t first = 121;  // the upper cloth's vertices follow the lower's 11 x 11
+  Scalar x = 0;
+  for (std::size_t v = first; v < model.masses.size(); ++v) x += state.positions[v].x();
+  return x / Scalar(model.masses.size() - first);
+}
+
+TEST(SelfContactsInTheSolve, AClothSlidingOnAnotherStopsWhereCoulombFrictionSays) {
+  const Scalar expected = 1.0 / (2 * 0.5 * 9.81);
+  EXPECT_NEAR(slid(0.5), expected, 0.15 * expected);
+  EXPECT_GT(slid(0), 0.25);  // 0.3 s at about 1 m/s, less the air's drag
+}
+
 }  // namespace

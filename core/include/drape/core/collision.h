@@ -77,6 +77,10 @@ constexpr Scalar SAME_DIRECTION = 0.95;
 /// otherwise it is a vertex's contact, found as such.
 constexpr Scalar INNER_WEIGHT = 0.01;
 
+/// Two cloth edges are a contact of the implicit solve only when the sine of their angle is at
+/// least this (about 6 degrees): nearly parallel edges have no common perpendicular to hold.
+constexpr Scalar SELF_EDGE_CROSSING = 0.1;
+
 /// A contact the implicit solve keeps (Baraff and Witkin 1998, section 5.3: a constraint on
 /// the velocity along the contact's normal; here held by a penalty): the relative velocity of
 /// its cloth points, sum_k weight_k v_k over its cloth vertices (a vertex; an edge's two, by
@@ -115,9 +119,10 @@ class CollisionPipeline {
 
   /// The contacts of the cloth with itself at the step's start (self-collision on): each
   /// vertex-face and edge-edge pair of free vertices closer than reach times the gap the
-  /// response keeps between them (the thickness, or the rest shape's share of it), the pairs the
-  /// response's proximity impulses act on, in a whole round's order. The broad phase's time
-  /// and pairs join counters.
+  /// response keeps between them (the thickness, or the rest shape's share of it), closest
+  /// inside both features (each weight above INNER_WEIGHT) and, for two edges, not nearly
+  /// parallel (SELF_EDGE_CROSSING), in a whole round's order. The broad phase's time and pairs
+  /// join counters.
   std::vector<SolveContact> self_contacts(const std::vector<Vec3>& start, Scalar reach, CollisionCounters& counters);
 
   /// Whether the scene needs the pipeline at all (self-collision on, or mesh obstacles with
