@@ -86,7 +86,8 @@ struct Integrator::Workspace {
   std::vector<SolveContact> contacts;
   using ContactBlocks = std::array<std::array<std::array<int, 3>, 4>, 4>;
   std::vector<ContactBlocks> contact_blocks;  // [contact][i][j]: block (vertex i, vertex j)
-  std::vector<std::pair<int, int>> extra_blocks;  // free vertex pairs (a < b) the pattern joins for self contacts
+  std::vector<std::pair<int, int>> extra_blocks;  // free vertex pairs (a < b) the pattern joins for self contacts, sorted
+  std::vector<std::vector<int>> base_columns;     // per block column b, the rows a of the springs' and hinges' blocks, sorted
   std::vector<Scalar> contact_holds, contact_impulses;
   std::vector<char> contact_held;  // per contact: neither released nor found pulling in the solve
   std::vector<Scalar> assembled;   // the matrix's values before the contacts' penalties and friction
