@@ -422,7 +422,7 @@ StepReport Integrator::step(State& state) {
   const std::vector<Scalar> normal_force_before = work_->normal_force;
   const auto self_impulses_before = work_->self_impulses;
   std::vector<Scalar> kept_normal_force;
-  std::map<std::array<int, 5>, Scalar> kept_self_impulses;
+  std::map<std::array<int, 5>, std::pair<Scalar, Scalar>> kept_self_impulses;
   // The step's energy beyond its start and its sources' work, once taken as `parts` equal parts.
   const auto take = [&](State& s, int parts) {
     h_ = h / parts;

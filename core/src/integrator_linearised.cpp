@@ -165,8 +165,9 @@ bool Integrator::solve_linearised(State& state, const std::vector<Vec3>& pinned_
   }
 
   // The same friction between the cloth's layers, on the two sides' relative slip across a
-  // contact's normal, from the normal impulse the same contact (its vertices) made the step
-  // before: its terms join the contact's vertices as its penalty does (equal and opposite).
+  // contact's normal, from the normal force the same contact (its vertices) made the step
+  // before (its impulse over that step's length, which a halving changes): its terms join the
+  // contact's vertices as its penalty does (equal and opposite).
   if (mu > 0 && !w.self_impulses.empty())
     for (std::size_t k = 0; k < w.contacts.size(); ++k) {
       const SolveContact& c = w.contacts[k];
@@ -181,7 +182,7 @@ bool Integrator::solve_linearised(State& state, const std::vector<Vec3>& pinned_
         inverse_mass += c.weight[i] * c.weight[i] / m.masses[std::size_t(c.vertex[i])];
       }
       const Vec3 slip = across * relative;
-      const Scalar force = mu * before->second / h, speed = slip.norm();
+      const Scalar force = mu * before->second.first / before->second.second, speed = slip.norm();
       Mat3 block;
       Vec3 pushed;
       if (h * force * inverse_mass >= speed) {  // it can stop the slip within the step: a drag
@@ -241,7 +242,8 @@ bool Integrator::solve_linearised(State& state, const std::vector<Vec3>& pinned_
   // The normal impulses of the cloth's contacts with itself, for the next step's friction.
   w.self_impulses.clear();
   for (std::size_t k = 0; k < w.contacts.size(); ++k)
-    if (w.contacts[k].self && w.contact_impulses[k] > 0) w.self_impulses.emplace(self_contact_key(w.contacts[k]), w.contact_impulses[k]);
+    if (w.contacts[k].self && w.contact_impulses[k] > 0)
+      w.self_impulses.emplace(self_contact_key(w.contacts[k]), std::make_pair(w.contact_impulses[k], h));
   // The normal forces of the obstacles' contacts, for the next step's friction.
   w.normal_force.assign(std::size_t(n), 0);
   for (std::size_t k = 0; k < w.contacts.size(); ++k)

@@ -100,9 +100,10 @@ struct Integrator::Workspace {
   std::vector<Scalar> scale;  // per free vertex: its diagonal block's largest entry before penalties
   Scalar contact_work = 0;           // J: what the held contacts did at moving obstacles in the last solve
   std::vector<Scalar> normal_force;  // per vertex, N: what its contacts pushed with in the last solve
-  // N s: what each of the cloth's contacts with itself pushed with in the last solve (those that
-  // pushed), by self_contact_key, for the next step's friction between the layers.
-  std::map<std::array<int, 5>, Scalar> self_impulses;
+  // What each of the cloth's contacts with itself pushed with in the last solve (those that
+  // pushed), by self_contact_key, for the next step's friction between the layers: its impulse
+  // (N s) and that solve's step (s).
+  std::map<std::array<int, 5>, std::pair<Scalar, Scalar>> self_impulses;
 
   std::array<int, 3> block(int a, int b) const {
     std::array<int, 3> offsets{};
