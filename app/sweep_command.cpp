@@ -21,6 +21,7 @@ struct SweepArguments {
   std::vector<double> thickness;
   std::vector<int> impulses;
   std::vector<int> zones;
+  std::vector<std::string> self_in_solve;
   int reference_steps = 0;
   std::string out;
   bool plot = true;
@@ -56,6 +57,8 @@ int sweep(const SweepArguments& args, const Ranks& ranks) {
   if (grid.max_impulse_iterations.empty()) grid.max_impulse_iterations = {scene.collisions.max_impulse_iterations};
   grid.max_zone_iterations = args.zones;
   if (grid.max_zone_iterations.empty()) grid.max_zone_iterations = {scene.collisions.max_zone_iterations};
+  for (const std::string& held : args.self_in_solve) grid.self_in_solve.push_back(held == "on");
+  if (grid.self_in_solve.empty()) grid.self_in_solve = {scene.collisions.self_in_solve};
 
   // The reference: the most accurate setting the knobs allow.
   SweepSetting reference = setting_of(scene);
@@ -199,9 +202,15 @@ Command add_sweep_command(CLI::App& app) {
   cmd->add_option("--zones", args->zones, "max_zone_iterations values to try (default: the scene's)")
       ->delimiter(',')
       ->check(CLI::Range(0, 1000));
+  cmd->add_option("--self-in-solve", args->self_in_solve,
+                  "collisions.self_in_solve values to try: on (self contacts held in the cholmod solve), off (the "
+                  "response alone); default: the scene's")
+      ->delimiter(',')
+      ->check(CLI::IsMember({"on", "off"}));
   cmd->add_option("--reference-steps", args->reference_steps,
                   "Steps per frame of the reference run (default: twice the most tried); the reference also uses "
-                  "cholmod, the conservative CCD method, the scene's thickness and the most impulse and zone rounds")
+                  "cholmod, the conservative CCD method, the scene's thickness and self_in_solve, and the most impulse and zone "
+                  "rounds")
       ->check(CLI::Range(1, 100000));
   cmd->add_option("--out", args->out, "Output folder (default: out/<scene>_sweep)");
   cmd->add_flag("!--no-plot", args->plot, "Write the table only");

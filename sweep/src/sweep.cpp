@@ -31,13 +31,13 @@ std::string SweepSetting::label() const {
         << ":tolerance=" << solver.tolerance << ":chebyshev=" << solver.chebyshev;
   else out << "cg:" << solver.tolerance;
   out << " ccd=" << ccd::method_name(method) << " thickness=" << thickness << " impulses=" << max_impulse_iterations
-      << " zones=" << max_zone_iterations;
+      << " zones=" << max_zone_iterations << " self_in_solve=" << (self_in_solve ? "on" : "off");
   return out.str();
 }
 
 SweepSetting setting_of(const Scene& scene) {
   return {scene.frame_steps, scene.solver, scene.collisions.method, scene.collisions.thickness,
-          scene.collisions.max_impulse_iterations, scene.collisions.max_zone_iterations};
+          scene.collisions.max_impulse_iterations, scene.collisions.max_zone_iterations, scene.collisions.self_in_solve};
 }
 
 std::vector<SweepSetting> SweepGrid::settings() const {
@@ -47,7 +47,8 @@ std::vector<SweepSetting> SweepGrid::settings() const {
       for (ccd::Method method : methods)
         for (Scalar t : thickness)
           for (int impulses : max_impulse_iterations)
-            for (int zones : max_zone_iterations) out.push_back({steps, solver, method, t, impulses, zones});
+            for (int zones : max_zone_iterations)
+              for (bool held : self_in_solve) out.push_back({steps, solver, method, t, impulses, zones, held});
   return out;
 }
 
@@ -123,6 +124,7 @@ Scene with_setting(Scene scene, const SweepSetting& s) {
   scene.collisions.thickness = s.thickness;
   scene.collisions.max_impulse_iterations = s.max_impulse_iterations;
   scene.collisions.max_zone_iterations = s.max_zone_iterations;
+  scene.collisions.self_in_solve = s.self_in_solve;
   return scene;
 }
 
@@ -232,10 +234,10 @@ std::filesystem::path run_folder(const SweepPlan& plan, std::size_t run) {
 nlohmann::json identity(const SweepPlan& plan, std::size_t run) {
   const SweepSetting& s = plan.setting(run);
   char exact[256];
-  std::snprintf(exact, sizeof exact, "%d %d %.17g %d %d %.17g %s %.17g %d %d", s.frame_steps, int(s.solver.kind),
+  std::snprintf(exact, sizeof exact, "%d %d %.17g %d %d %.17g %s %.17g %d %d %d", s.frame_steps, int(s.solver.kind),
                 double(s.solver.tolerance), s.solver.iterations, s.solver.history, double(s.solver.chebyshev),
                 std::string(ccd::method_name(s.method)).c_str(), double(s.thickness), s.max_impulse_iterations,
-                s.max_zone_iterations);
+                s.max_zone_iterations, int(s.self_in_solve));
   return {{"setting", s.label()}, {"exact", exact}, {"reference", run == 0}, {"frames", plan.frames},
           {"scene", plan.scene.file.string()}, {"inputs", scene_fingerprint(plan.scene)}};
 }
@@ -339,7 +341,7 @@ void mark_pareto_front(std::vector<SweepResult>& results) {
 }
 
 std::string sweep_csv_header() {
-  return "reference,frame_steps,solver,tolerance,projective_iterations,projective_history,chebyshev,method,thickness,max_impulse_iterations,max_zone_iterations,frames_done,failed,"
+  return "reference,frame_steps,solver,tolerance,projective_iterations,projective_history,chebyshev,method,thickness,max_impulse_iterations,max_zone_iterations,self_in_solve,frames_done,failed,"
          "wall_ms_per_frame,rms_error_m,max_error_m,energy_error_j,energy_drift_j,penetrations,pareto,failure";
 }
 
@@ -349,12 +351,12 @@ std::string sweep_csv_row(const SweepResult& r) {
   std::replace(failure.begin(), failure.end(), '"', '\'');
   char row[512];
   const bool cg = s.solver.kind == SolverKind::ConjugateGradient, projective = s.solver.kind == SolverKind::Projective;
-  std::snprintf(row, sizeof row, "%d,%d,%s,%.3g,%d,%d,%.6g,%s,%.6g,%d,%d,%d,%d,%.3f,%.6e,%.6e,%.6e,%.6e,%ld,%d,", int(r.reference),
+  std::snprintf(row, sizeof row, "%d,%d,%s,%.3g,%d,%d,%.6g,%s,%.6g,%d,%d,%d,%d,%d,%.3f,%.6e,%.6e,%.6e,%.6e,%ld,%d,", int(r.reference),
                 s.frame_steps, cg ? "cg" : projective ? "projective" : "cholmod",
                 cg || projective ? double(s.solver.tolerance) : 0.0, projective ? s.solver.iterations : 0,
                 projective ? s.solver.history : 0, projective && s.solver.history == 0 ? double(s.solver.chebyshev) : 0.0,
                 std::string(ccd::method_name(s.method)).c_str(), double(s.thickness), s.max_impulse_iterations,
-                s.max_zone_iterations, r.frames_done, int(r.failed), r.wall_ms_per_frame, r.rms_error, r.max_error, r.energy_error,
+                s.max_zone_iterations, int(s.self_in_solve), r.frames_done, int(r.failed), r.wall_ms_per_frame, r.rms_error, r.max_error, r.energy_error,
                 r.energy_drift, r.penetrations, int(r.pareto));
   return row + (failure.empty() ? std::string() : "\"" + failure + "\"");
 }

@@ -49,4 +49,23 @@ TEST(SweepCommand, BadFlagsNameTheFlag) {
   const Outcome thickness = run_drape("sweep " + scene + " --thickness nan");
   EXPECT_EQ(thickness.status, 2);
   EXPECT_NE(thickness.output.find("--thickness"), std::string::npos) << thickness.output;
+  const Outcome held = run_drape("sweep " + scene + " --self-in-solve maybe");
+  EXPECT_EQ(held.status, 2);
+  EXPECT_NE(held.output.find("--self-in-solve"), std::string::npos) << held.output;
+}
+
+TEST(SweepCommand, SelfContactsInTheSolveAreAKnob) {
+  const fs::path out = fresh_temp_path("sweep", "held");
+  const Outcome run = run_drape("sweep " DRAPE_SOURCE_DIR "/scenes/cloth_fold.json --frames 2 --steps 5 --solvers cholmod "
+                                "--methods vincent --self-in-solve on,off --no-plot --out " + out.string());
+  ASSERT_EQ(run.status, 0) << run.output;
+  EXPECT_NE(run.output.find("self_in_solve=on"), std::string::npos) << run.output;
+  EXPECT_NE(run.output.find("self_in_solve=off"), std::string::npos) << run.output;
+  std::ifstream csv(out / "sweep.csv");
+  std::string header, line;
+  std::getline(csv, header);
+  EXPECT_NE(header.find(",max_zone_iterations,self_in_solve,frames_done,"), std::string::npos) << header;
+  int lines = 0;
+  while (std::getline(csv, line)) ++lines;
+  EXPECT_EQ(lines, 1 + 2);  // reference, on and off
 }

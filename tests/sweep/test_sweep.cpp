@@ -35,10 +35,11 @@ TEST(Sweep, GridIsTheProductOfTheKnobs) {
   grid.thickness = {0.005};
   grid.max_impulse_iterations = {4, 8};
   grid.max_zone_iterations = {16};
+  grid.self_in_solve = {true, false};
   const auto settings = grid.settings();
-  EXPECT_EQ(settings.size(), 3u * 3 * 2 * 1 * 2 * 1);
-  EXPECT_EQ(settings.front().label(), "steps=5 solver=cholmod ccd=vincent thickness=0.005 impulses=4 zones=16");
-  EXPECT_EQ(settings.back().label(), "steps=20 solver=projective:iterations=10:history=5:tolerance=1e-08:chebyshev=0.99 ccd=conservative thickness=0.005 impulses=8 zones=16");
+  EXPECT_EQ(settings.size(), 3u * 3 * 2 * 1 * 2 * 1 * 2);
+  EXPECT_EQ(settings.front().label(), "steps=5 solver=cholmod ccd=vincent thickness=0.005 impulses=4 zones=16 self_in_solve=on");
+  EXPECT_EQ(settings.back().label(), "steps=20 solver=projective:iterations=10:history=5:tolerance=1e-08:chebyshev=0.99 ccd=conservative thickness=0.005 impulses=8 zones=16 self_in_solve=off");
 }
 
 TEST(Sweep, SolverSettings) {

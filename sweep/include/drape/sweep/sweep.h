@@ -24,7 +24,8 @@ struct SweepSetting {
   Scalar thickness = 0;          ///< m
   int max_impulse_iterations = 0;
   int max_zone_iterations = 0;
-  /// "steps=10 solver=cg:1e-06 ccd=vincent thickness=0.005 impulses=8 zones=16"
+  bool self_in_solve = true;     ///< collisions.self_in_solve: self contacts held in the linearised solve
+  /// "steps=10 solver=cg:1e-06 ccd=vincent thickness=0.005 impulses=8 zones=16 self_in_solve=on"
   std::string label() const;
 };
 
@@ -39,6 +40,7 @@ struct SweepGrid {
   std::vector<Scalar> thickness;
   std::vector<int> max_impulse_iterations;
   std::vector<int> max_zone_iterations;
+  std::vector<bool> self_in_solve;
   std::vector<SweepSetting> settings() const;
 };
 
