@@ -28,7 +28,7 @@ Integrator::Integrator(const Model& model, int threads) : model_(model), work_(s
   Workspace& w = *work_;
   const int n = int(model.vertex_count());
   w.free_index.assign(n, -1);
-  w.normal_force.assign(std::size_t(n), 0);
+  w.lagged.normal_force.assign(std::size_t(n), 0);
   for (int v = 0; v < n; ++v)
     if (model.pin_of_vertex[v] < 0) w.free_index[v] = w.free_count++;
   energy_tolerance_ = STEP_ENERGY_TOLERANCE * energy_scale(model);
@@ -350,17 +350,21 @@ void Integrator::find_contacts(const State& state, StepReport& report) {
     const auto self = collisions_->self_contacts(state.positions, CONTACT_REACH, report.collisions);
     report.collisions.held_self_contacts += long(self.size());
     w.contacts.insert(w.contacts.end(), self.begin(), self.end());
+    // Each pair (a < b) of free vertices the self contacts join, with repeats.
+    const auto each_pair = [&](auto&& visit) {
+      for (std::size_t k = first; k < w.contacts.size(); ++k)
+        for (int i = 0; i < 4; ++i)
+          for (int j = i + 1; j < 4; ++j) {
+            const int a = w.free_index[std::size_t(w.contacts[k].vertex[i])], b = w.free_index[std::size_t(w.contacts[k].vertex[j])];
+            if (a != b) visit(std::min(a, b), std::max(a, b));
+          }
+    };
     std::vector<std::pair<int, int>> missing;
-    std::size_t needed = 0;  // the contacts' pairs of vertices, counted with repeats
-    for (std::size_t k = first; k < w.contacts.size(); ++k)
-      for (int i = 0; i < 4; ++i)
-        for (int j = i + 1; j < 4; ++j) {
-          int a = w.free_index[std::size_t(w.contacts[k].vertex[i])], b = w.free_index[std::size_t(w.contacts[k].vertex[j])];
-          if (a == b) continue;
-          if (a > b) std::swap(a, b);
-          ++needed;
-          if (!w.find_block(a, b)) missing.emplace_back(a, b);
-        }
+    std::size_t needed = 0;
+    each_pair([&](int a, int b) {
+      ++needed;
+      if (!w.find_block(a, b)) missing.emplace_back(a, b);
+    });
     if (!missing.empty()) {
       // The pairs of earlier contacts stay in the pattern (a cloth at rest keeps its contacts,
       // and each new pattern is analysed again) until they outnumber the current ones.
@@ -370,12 +374,7 @@ void Integrator::find_contacts(const State& state, StepReport& report) {
       if (w.extra_blocks.size() <= EXTRA_BLOCKS_KEPT * needed) {
         std::merge(w.extra_blocks.begin(), w.extra_blocks.end(), missing.begin(), missing.end(), std::back_inserter(extra));
       } else {  // from the current contacts alone
-        for (std::size_t k = first; k < w.contacts.size(); ++k)
-          for (int i = 0; i < 4; ++i)
-            for (int j = i + 1; j < 4; ++j) {
-              int a = w.free_index[std::size_t(w.contacts[k].vertex[i])], b = w.free_index[std::size_t(w.contacts[k].vertex[j])];
-              if (a != b) extra.emplace_back(std::min(a, b), std::max(a, b));
-            }
+        each_pair([&](int a, int b) { extra.emplace_back(a, b); });
         std::sort(extra.begin(), extra.end());
       }
       extra.erase(std::unique(extra.begin(), extra.end()), extra.end());
@@ -419,15 +418,12 @@ StepReport Integrator::step(State& state) {
   const Scalar energy_before = kinetic_energy(m, state) + potential_before;
   // The friction of every attempt starts from the normal forces the step before left; the
   // kept attempt's are the next step's.
-  const std::vector<Scalar> normal_force_before = work_->normal_force;
-  const auto self_impulses_before = work_->self_impulses;
-  std::vector<Scalar> kept_normal_force;
-  std::map<std::array<int, 5>, std::pair<Scalar, Scalar>> kept_self_impulses;
+  const Workspace::Lagged lagged_before = work_->lagged;
+  Workspace::Lagged kept_lagged;
   // The step's energy beyond its start and its sources' work, once taken as `parts` equal parts.
   const auto take = [&](State& s, int parts) {
     h_ = h / parts;
-    work_->normal_force = normal_force_before;
-    work_->self_impulses = self_impulses_before;
+    work_->lagged = lagged_before;
     StepReport report = advance(s);
     for (int k = 1; k < parts && report.ok; ++k) report.add(advance(s));
     const Scalar potential = potential_energy(m, s);
@@ -436,8 +432,7 @@ StepReport Integrator::step(State& state) {
     return std::make_pair(report, excess);
   };
   auto [report, excess] = take(state, 1);
-  kept_normal_force = work_->normal_force;
-  kept_self_impulses = work_->self_impulses;
+  kept_lagged = work_->lagged;
   // The step made energy no source put in (an impact whose response the step's size could not
   // spread: a stopped vertex strains its neighbours' springs in one step): taken again in 2,
   // 4, ... parts while that excess keeps falling by half at least (strain from one step's
@@ -455,8 +450,7 @@ StepReport Integrator::step(State& state) {
     if (finer_excess < excess) {
       spent.add(report);
       report = finer, excess = finer_excess, state = std::move(again);
-      kept_normal_force = work_->normal_force;
-      kept_self_impulses = work_->self_impulses;
+      kept_lagged = work_->lagged;
       report.step_halvings = 0;
       ++spent.step_halvings;
     } else {
@@ -464,8 +458,7 @@ StepReport Integrator::step(State& state) {
     }
     if (!converging) break;
   }
-  work_->normal_force = std::move(kept_normal_force);
-  work_->self_impulses = std::move(kept_self_impulses);
+  work_->lagged = std::move(kept_lagged);
   // Counted once: the halvings of the kept attempt (log2 of its parts) and the work of all.
   const int halvings = spent.step_halvings;
   report.solve_ms += spent.solve_ms;

@@ -8,6 +8,25 @@
 
 namespace drape {
 
+namespace {
+
+// Lagged Coulomb friction's terms in the solve, for a slip (speed its length) across a contact
+// (across: the projection off its normal) under a normal force: where it could stop the slip
+// within the step (stops), an implicit drag reaching the force at the slip speed (or at
+// FRICTION_SLIP, for a slower slip), so it never reverses the slip and holds what sticks;
+// otherwise the force itself, linearised at the slip (constant along it, turning it across).
+// The matrix's block and the right-hand side's part: the impulse is pushed - block dv.
+std::pair<Mat3, Vec3> friction_terms(Scalar h, Scalar force, const Mat3& across, const Vec3& slip, Scalar speed, bool stops) {
+  if (stops) {
+    const Scalar drag = force / std::max(speed, FRICTION_SLIP);
+    return {h * drag * across, -h * drag * slip};
+  }
+  const Vec3 direction = slip / speed;
+  return {h * force / speed * (across - direction * direction.transpose()), -h * force * direction};
+}
+
+}  // namespace
+
 void Integrator::assemble(const std::vector<Vec3>& x, const std::vector<Vec3>& v, std::vector<Vec3>& forces,
                           std::vector<Vec3>* stiffness_times_v, const std::vector<Vec3>* pinned_dv,
                           std::vector<Vec3>* coupling) {
@@ -120,10 +139,8 @@ bool Integrator::solve_linearised(State& state, const std::vector<Vec3>& pinned_
   // Coulomb friction of the contacts, in the solve, from the normal force each vertex's
   // contacts made the step before (lagged, as in Baraff and Witkin 1998, section 5.3): a vertex
   // slipping across its contact's normal at the step's start feels friction times that force
-  // against its slip. Where that could stop the slip within the step, as an implicit drag that
-  // reaches the force at the slip speed (or at FRICTION_SLIP, for a vertex slower than that),
-  // so it never reverses the slip and holds what sticks; otherwise as the force itself,
-  // linearised at the slip (constant along it, turning it across). In the solve, the neighbours of
+  // against its slip (friction_terms: a drag where it could stop the slip, else the force
+  // itself). In the solve, the neighbours of
   // a vertex it holds are held with it (applied after the solve, it stopped a tablecloth's rim
   // vertices while the springs to the hanging side had been solved for them sliding: the
   // springs stretched).
@@ -140,23 +157,13 @@ bool Integrator::solve_linearised(State& state, const std::vector<Vec3>& pinned_
     const std::vector<int> strongest = strongest_contacts(w.contacts, n);
     for (int v = 0; v < n; ++v) {
       const int k = strongest[std::size_t(v)];
-      if (k < 0 || !(w.normal_force[std::size_t(v)] > 0)) continue;
+      if (k < 0 || !(w.lagged.normal_force[std::size_t(v)] > 0)) continue;
       const SolveContact& c = w.contacts[std::size_t(k)];
       const Mat3 across = Mat3::Identity() - c.normal * c.normal.transpose();
       const Vec3 slip = across * (state.velocities[v] - c.surface_velocity);
-      const Scalar force = mu * w.normal_force[std::size_t(v)], speed = slip.norm();
+      const Scalar force = mu * w.lagged.normal_force[std::size_t(v)], speed = slip.norm();
       const int a = w.free_index[v];
-      Mat3 block;
-      Vec3 pushed;
-      if (h * force >= m.masses[v] * speed) {  // it can stop the slip within the step: a drag
-        const Scalar drag = force / std::max(speed, FRICTION_SLIP);
-        block = h * drag * across;
-        pushed = -h * drag * slip;
-      } else {
-        const Vec3 direction = slip / speed;
-        block = h * force / speed * (across - direction * direction.transpose());
-        pushed = -h * force * direction;
-      }
+      const auto [block, pushed] = friction_terms(h, force, across, slip, speed, h * force >= m.masses[v] * speed);
       w.add_block(w.diagonal[a], block);
       w.friction_blocks.push_back({v, block, c.analytic});
       w.rhs.segment<3>(3 * a) += pushed;
@@ -168,12 +175,12 @@ bool Integrator::solve_linearised(State& state, const std::vector<Vec3>& pinned_
   // contact's normal, from the normal force the same contact (its vertices) made the step
   // before (its impulse over that step's length, which a halving changes): its terms join the
   // contact's vertices as its penalty does (equal and opposite).
-  if (mu > 0 && !w.self_impulses.empty())
+  if (mu > 0 && !w.lagged.self_impulses.empty())
     for (std::size_t k = 0; k < w.contacts.size(); ++k) {
       const SolveContact& c = w.contacts[k];
       if (!c.self) continue;
-      const auto before = w.self_impulses.find(self_contact_key(c));
-      if (before == w.self_impulses.end()) continue;
+      const auto before = w.lagged.self_impulses.find(self_contact_key(c));
+      if (before == w.lagged.self_impulses.end()) continue;
       const Mat3 across = Mat3::Identity() - c.normal * c.normal.transpose();
       Vec3 relative = Vec3::Zero();
       Scalar inverse_mass = 0;  // of the relative motion, sum w_i^2 / m_i
@@ -183,17 +190,7 @@ bool Integrator::solve_linearised(State& state, const std::vector<Vec3>& pinned_
       }
       const Vec3 slip = across * relative;
       const Scalar force = mu * before->second.first / before->second.second, speed = slip.norm();
-      Mat3 block;
-      Vec3 pushed;
-      if (h * force * inverse_mass >= speed) {  // it can stop the slip within the step: a drag
-        const Scalar drag = force / std::max(speed, FRICTION_SLIP);
-        block = h * drag * across;
-        pushed = -h * drag * slip;
-      } else {
-        const Vec3 direction = slip / speed;
-        block = h * force / speed * (across - direction * direction.transpose());
-        pushed = -h * force * direction;
-      }
+      const auto [block, pushed] = friction_terms(h, force, across, slip, speed, h * force * inverse_mass >= speed);
       for (int i = 0; i < c.count; ++i) {
         w.rhs.segment<3>(3 * w.free_index[std::size_t(c.vertex[i])]) += c.weight[i] * pushed;
         for (int j = 0; j < c.count; ++j) w.add_block(w.contact_blocks[k][i][j], c.weight[i] * c.weight[j] * block);
@@ -240,15 +237,15 @@ bool Integrator::solve_linearised(State& state, const std::vector<Vec3>& pinned_
     w.contact_work += (f.pushed - f.block * w.solution.segment<3>(3 * w.free_index[std::size_t(f.vertex)])).dot(f.surface);
   w.contact_work = std::max<Scalar>(0, w.contact_work);
   // The normal impulses of the cloth's contacts with itself, for the next step's friction.
-  w.self_impulses.clear();
+  w.lagged.self_impulses.clear();
   for (std::size_t k = 0; k < w.contacts.size(); ++k)
     if (w.contacts[k].self && w.contact_impulses[k] > 0)
-      w.self_impulses.emplace(self_contact_key(w.contacts[k]), std::make_pair(w.contact_impulses[k], h));
+      w.lagged.self_impulses.emplace(self_contact_key(w.contacts[k]), std::make_pair(w.contact_impulses[k], h));
   // The normal forces of the obstacles' contacts, for the next step's friction.
-  w.normal_force.assign(std::size_t(n), 0);
+  w.lagged.normal_force.assign(std::size_t(n), 0);
   for (std::size_t k = 0; k < w.contacts.size(); ++k)
     for (int i = 0; i < w.contacts[k].count && !w.contacts[k].self; ++i)
-      w.normal_force[std::size_t(w.contacts[k].vertex[i])] += w.contacts[k].weight[i] * w.contact_impulses[k] / h;
+      w.lagged.normal_force[std::size_t(w.contacts[k].vertex[i])] += w.contacts[k].weight[i] * w.contact_impulses[k] / h;
 
   // Velocities; the motion of the step starts as the same velocities.
   for (int v = 0; v < n; ++v) {

@@ -59,17 +59,17 @@ bool Integrator::solve_projective(State& state, const std::vector<Vec3>& pinned_
     if (m.scene.friction > 0) {
       const std::vector<int> strongest = strongest_contacts(w.contacts, int(n));
       for (std::size_t v = 0; v < n; ++v)
-        if (strongest[v] >= 0 && w.normal_force[v] > 0) {
+        if (strongest[v] >= 0 && w.lagged.normal_force[v] > 0) {
           const SolveContact& c = w.contacts[std::size_t(strongest[v])];
-          contacts.friction.push_back({int(v), c.normal, c.surface_velocity, m.scene.friction * w.normal_force[v]});
+          contacts.friction.push_back({int(v), c.normal, c.surface_velocity, m.scene.friction * w.lagged.normal_force[v]});
         }
     }
   }
   if (!iterate_projective(state.positions, positions, report, "the projective solver failed: ", nullptr, &contacts))
     return false;
   // The normal forces, for the next step's friction; the contacts' work, for the ledger.
-  w.normal_force.resize(n);
-  for (std::size_t v = 0; v < n; ++v) w.normal_force[v] = projective_->contact_impulses()[v] / h;
+  w.lagged.normal_force.resize(n);
+  for (std::size_t v = 0; v < n; ++v) w.lagged.normal_force[v] = projective_->contact_impulses()[v] / h;
   w.contact_work = projective_->contact_work();
   for (std::size_t v = 0; v < n; ++v)
     state.velocities[v] = w.free_index[v] >= 0 ? Vec3((positions[v] - state.positions[v]) / h)

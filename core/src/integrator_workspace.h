@@ -99,11 +99,16 @@ struct Integrator::Workspace {
   std::vector<FrictionBlock> friction_blocks;  // the solve's friction terms
   std::vector<Scalar> scale;  // per free vertex: its diagonal block's largest entry before penalties
   Scalar contact_work = 0;           // J: what the held contacts did at moving obstacles in the last solve
-  std::vector<Scalar> normal_force;  // per vertex, N: what its contacts pushed with in the last solve
-  // What each of the cloth's contacts with itself pushed with in the last solve (those that
-  // pushed), by self_contact_key, for the next step's friction between the layers: its impulse
-  // (N s) and that solve's step (s).
-  std::map<std::array<int, 5>, std::pair<Scalar, Scalar>> self_impulses;
+  // What the last solve's contacts pushed with, for the next step's lagged friction (a step
+  // taken again in parts starts each attempt from the step before's, and keeps the kept
+  // attempt's).
+  struct Lagged {
+    std::vector<Scalar> normal_force;  // per vertex, N: what its obstacle contacts pushed with
+    // What each of the cloth's contacts with itself pushed with (those that pushed), by
+    // self_contact_key: its impulse (N s) and that solve's step (s).
+    std::map<std::array<int, 5>, std::pair<Scalar, Scalar>> self_impulses;
+  };
+  Lagged lagged;
 
   std::array<int, 3> block(int a, int b) const {
     std::array<int, 3> offsets{};
