@@ -8,6 +8,13 @@
 
 namespace drape {
 
+namespace {
+
+// A closest point's weight inside its feature, not at its rim (INNER_WEIGHT).
+bool inner(Scalar w) { return w > INNER_WEIGHT && w < 1 - INNER_WEIGHT; }
+
+}  // namespace
+
 std::vector<SolveContact> CollisionPipeline::mesh_contacts(const std::vector<Vec3>& start, Scalar t, Scalar h,
                                                            Scalar reach) {
   Impl& m = *impl_;
@@ -51,7 +58,6 @@ std::vector<SolveContact> CollisionPipeline::mesh_contacts(const std::vector<Vec
       }
     list.emplace_back(distance, contact);
   };
-  const auto inner = [](Scalar w) { return w > INNER_WEIGHT && w < 1 - INNER_WEIGHT; };
   const auto& x = m.start;
   for (const auto& p : c.vertex_face) {
     const auto& f = p.face;
@@ -120,7 +126,6 @@ std::vector<SolveContact> CollisionPipeline::self_contacts(const std::vector<Vec
   // sliding over another closes: held in the solve, such pairs stopped a cloth sliding on
   // another at once, and left the vertices over the rims to the response, whose impulses the
   // held ones then carried through the springs.
-  const auto inner = [](Scalar w) { return w > INNER_WEIGHT && w < 1 - INNER_WEIGHT; };
   const auto add = [&](bool vertex_face, Contact contact, const Vec3& offset) {
     if (!std::all_of(contact.vertex.begin(), contact.vertex.end(), free)) return;  // a pinned side is the response's
     const Scalar distance = offset.norm();

@@ -74,14 +74,13 @@ void Integrator::build_pattern(const std::vector<std::pair<int, int>>& extra) {
   for (const auto& [a, b] : extra) added[std::size_t(b)].push_back(a), added[std::size_t(a)].push_back(b);
   std::vector<int> column;
   std::vector<SparseMatrix::StorageIndex> outer(std::size_t(3 * w.free_count + 1), 0), inner;
-  inner.reserve(std::size_t(9) * (w.extra_blocks.size() * 2 + std::size_t(w.free_count) * 16));
+  inner.reserve(std::size_t(9) * (extra.size() * 2 + std::size_t(w.free_count) * 16));
   for (int b = 0; b < w.free_count; ++b) {
     const auto& base = w.base_columns[std::size_t(b)];
     auto& more = added[std::size_t(b)];
     std::sort(more.begin(), more.end());
     column.clear();
-    std::set_union(base.begin(), base.end(), more.begin(), more.end(), std::back_inserter(column));
-    column.erase(std::unique(column.begin(), column.end()), column.end());
+    std::set_union(base.begin(), base.end(), more.begin(), more.end(), std::back_inserter(column));  // both unique
     for (int c = 0; c < 3; ++c) {
       for (const int a : column)
         for (int r = 0; r < 3; ++r) inner.push_back(SparseMatrix::StorageIndex(3 * a + r));

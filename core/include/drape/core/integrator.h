@@ -122,8 +122,8 @@ class Integrator {
   // the cloth's contacts with itself too (their broad phase counted in report).
   void find_contacts(const State& state, StepReport& report);
   // The system matrix's pattern (the workspace's): the free vertices' diagonal blocks, the
-  // blocks the springs and hinges join, and extra pairs (a, b) of free vertices (both blocks);
-  // the offsets of the springs' and hinges' blocks found again.
+  // blocks the springs and hinges join, and extra pairs (a, b) of free vertices, a < b,
+  // unique (both blocks); the offsets of the springs' and hinges' blocks found again.
   void build_pattern(const std::vector<std::pair<int, int>>& extra);
   // Strain limiting after the solve (Provot 1995, on velocities as Bridson, Fedkiw and
   // Anderson 2002): each limited spring whose length at the step's end (positions + h motion)
