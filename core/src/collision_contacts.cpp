@@ -117,7 +117,12 @@ std::vector<SolveContact> CollisionPipeline::self_contacts(const std::vector<Vec
   const Scalar thickness = m.model.scene.collisions.thickness;
   const ccd::Candidates c = m.candidates(reach * thickness, counters, true, {}, false);
   const auto free = [&](int v) { return v < m.cloth_vertices && m.inverse_mass[std::size_t(v)] > 0; };
-  std::vector<std::pair<Contact, Scalar>> near;  // and its distance
+  struct Near {
+    Contact contact;
+    Scalar distance;
+    Scalar inside;  // a vertex and a face: the projection's least weight (inside the face: > 0)
+  };
+  std::vector<Near> near;
   // A vertex over a triangle (its projection on the triangle's plane inside it, or within
   // INNER_WEIGHT of its rim) is held along the triangle's normal, by the projection's weights
   // (Bridson, Fedkiw and Anderson 2002, section 7.1); two edges only where their closest
@@ -126,14 +131,14 @@ std::vector<SolveContact> CollisionPipeline::self_contacts(const std::vector<Vec
   // sliding over another closes: held in the solve, such pairs stopped a cloth sliding on
   // another at once, and left the vertices over the rims to the response, whose impulses the
   // held ones then carried through the springs.
-  const auto add = [&](bool vertex_face, Contact contact, const Vec3& offset) {
+  const auto add = [&](bool vertex_face, Contact contact, const Vec3& offset, Scalar inside) {
     if (!std::all_of(contact.vertex.begin(), contact.vertex.end(), free)) return;  // a pinned side is the response's
     const Scalar distance = offset.norm();
     if (!(distance < reach * thickness) || !(distance > 0)) return;
     if (!(distance < reach * m.kept_gap(vertex_face, contact.vertex, counters))) return;
     contact.vertex_face = vertex_face;
     contact.normal = offset / distance;
-    near.emplace_back(contact, distance);
+    near.push_back({contact, distance, inside});
   };
   const auto& x = m.start;
   for (const auto& p : c.vertex_face) {
@@ -146,14 +151,15 @@ std::vector<SolveContact> CollisionPipeline::self_contacts(const std::vector<Vec
     const Vec3 q = x[p.vertex] - height * unit;  // the projection
     std::array<Scalar, 3> w{(b - q).cross(f - q).dot(unit) / twice_area, (f - q).cross(a - q).dot(unit) / twice_area, 0};
     w[2] = 1 - w[0] - w[1];
-    if (!std::all_of(w.begin(), w.end(), [](Scalar v) { return v > -INNER_WEIGHT; })) continue;
+    const Scalar inside = *std::min_element(w.begin(), w.end());
+    if (!(inside > -INNER_WEIGHT)) continue;
     Scalar sum = 0;
     for (Scalar& v : w) sum += v = std::max<Scalar>(v, 0);
     for (Scalar& v : w) v /= sum;
     Contact contact;
     contact.vertex = {p.vertex, p.face[0], p.face[1], p.face[2]};
     contact.weight = {1, -w[0], -w[1], -w[2]};
-    add(true, contact, height * unit);
+    add(true, contact, height * unit, inside);
   }
   for (const auto& p : c.edge_edge) {
     const auto closest = ccd::closest_segment_segment<Scalar>(x[p.edge_a[0]], x[p.edge_a[1]], x[p.edge_b[0]], x[p.edge_b[1]]);
@@ -164,12 +170,33 @@ std::vector<SolveContact> CollisionPipeline::self_contacts(const std::vector<Vec
     Contact contact;
     contact.vertex = {p.edge_a[0], p.edge_a[1], p.edge_b[0], p.edge_b[1]};
     contact.weight = {1 - closest.s, closest.s, -(1 - closest.u), -closest.u};
-    add(false, contact, closest.point_a - closest.point_b);
+    add(false, contact, closest.point_a - closest.point_b, 0);
   }
   // The tests come unsorted (feature_pairs' owners): the contacts in a whole round's order.
-  std::sort(near.begin(), near.end(), [&](const auto& a, const auto& b) { return m.listed_before(a.first, b.first); });
+  std::sort(near.begin(), near.end(), [&](const Near& a, const Near& b) { return m.listed_before(a.contact, b.contact); });
+  // A vertex over the faces around a mesh vertex or edge lies within INNER_WEIGHT of each: it
+  // is held once in a direction, by the face its projection lies most inside. Held by every
+  // such face, with weights a rounding apart, the penalties fought (some pushing, some
+  // pulling), and a cloth lifted off another by its edge took the one under it along.
+  std::vector<std::size_t> order;
+  for (std::size_t k = 0; k < near.size(); ++k)
+    if (near[k].contact.vertex_face) order.push_back(k);
+  std::stable_sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) {
+    const Near &p = near[a], &q = near[b];
+    return p.contact.vertex[0] != q.contact.vertex[0] ? p.contact.vertex[0] < q.contact.vertex[0] : p.inside > q.inside;
+  });
+  std::vector<char> dropped(near.size(), 0);
+  for (std::size_t begin = 0, end = 0; begin < order.size(); begin = end) {
+    for (end = begin; end < order.size() && near[order[end]].contact.vertex[0] == near[order[begin]].contact.vertex[0];) ++end;
+    for (std::size_t i = begin; i < end; ++i)
+      for (std::size_t j = begin; j < i && !dropped[order[i]]; ++j)
+        if (!dropped[order[j]] && near[order[j]].contact.normal.dot(near[order[i]].contact.normal) > SAME_DIRECTION) dropped[order[i]] = 1;
+  }
   out.reserve(near.size());
-  for (const auto& [n, distance] : near) {
+  for (std::size_t k = 0; k < near.size(); ++k) {
+    if (dropped[k]) continue;
+    const Contact& n = near[k].contact;
+    const Scalar distance = near[k].distance;
     SolveContact contact;
     contact.vertex = n.vertex;
     contact.weight = n.weight;

@@ -179,7 +179,7 @@ bool Integrator::solve_linearised(State& state, const std::vector<Vec3>& pinned_
     for (std::size_t k = 0; k < w.contacts.size(); ++k) {
       const SolveContact& c = w.contacts[k];
       if (!c.self) continue;
-      const auto before = w.lagged.self_impulses.find(self_contact_key(c));
+      const auto before = w.lagged.self_impulses.find(contact_key(c));
       if (before == w.lagged.self_impulses.end()) continue;
       const Mat3 across = Mat3::Identity() - c.normal * c.normal.transpose();
       Vec3 relative = Vec3::Zero();
@@ -204,29 +204,86 @@ bool Integrator::solve_linearised(State& state, const std::vector<Vec3>& pinned_
       scale = std::max(scale, w.scale[std::size_t(w.free_index[std::size_t(w.contacts[k].vertex[i])])]);
     w.contact_holds[k] = (w.contacts[k].self ? SELF_CONTACT_HOLD : RESPONSE_HOLD) * scale;
   }
+  // A contact whose force pulls its vertices (towards an obstacle, or the layers together) is
+  // released. The layers' and a moving obstacle's are released at once: the step is solved
+  // again without them, at most solver.release_solves times (1 by default), while any pulls
+  // or a released pair closes; those pulling after that are released at the next step. Held
+  // for the step, a pull between layers moves both sides with one velocity (a cloth lifted off
+  // another by its edge takes some of the one under it up with it: more solves, less of it,
+  // docs/collisions.md), and a moving obstacle's drags the cloth with it (a sphere leaving a
+  // struck curtain stretched it past its strain limit). A still obstacle's pulls alone are
+  // released at the next step's solve, as Baraff and Witkin (1998, section 5.3) release a
+  // constraint: held in this one, a pull keeps its vertices' normal speed at zero, does no
+  // work and gives them no momentum; it stays released while its vertices do not approach.
+  // Solved again for the ground's pulls, the pile's heaped frames factorised the system twice
+  // a step.
   std::vector<char> held(w.contacts.size(), 1);
+  std::vector<std::pair<std::array<int, 5>, Vec3>> still_released;
+  for (std::size_t k = 0; k < w.contacts.size(); ++k)
+    if (w.lagged.is_released(w.contacts[k]) && !(normal_velocity(w.contacts[k], nullptr) < w.contacts[k].target))
+      held[k] = 0, still_released.emplace_back(contact_key(w.contacts[k]), w.contacts[k].normal);
+  w.lagged.released = std::move(still_released);
   hold_contacts(1, held);
   w.contact_impulses.assign(w.contacts.size(), 0);
+  std::vector<Vec3> layers_push(static_cast<std::size_t>(n));  // per vertex: the held layers' contacts' push
+  std::vector<char> released_now(w.contacts.size(), 0);         // released by a solve again of this step
   for (int attempt = 0;; ++attempt) {
     if (!solve(report, "the linear solver failed: ")) return false;
+    for (std::size_t k = 0; k < w.contacts.size(); ++k)
+      if (held[k]) w.contact_impulses[k] = w.contact_holds[k] * (w.contacts[k].target - normal_velocity(w.contacts[k], &w.solution));
+    // The contacts between layers over-determine their vertices' motion (a vertex over a
+    // face, that face's vertices under faces around it, edges crossing between), and their
+    // penalties share the load unevenly: two layers driven together had a third of their held
+    // contacts pulling in a step where all stop the approach. Such a contact is not pulling
+    // while the held contacts together push its sides apart: only where their sum, along its
+    // normal, brings its sides together (its vertices' pushes over their masses, by its
+    // weights) is its pull one.
+    std::fill(layers_push.begin(), layers_push.end(), Vec3::Zero());
+    for (std::size_t k = 0; k < w.contacts.size(); ++k)
+      if (held[k] && w.contacts[k].self)
+        for (int i = 0; i < w.contacts[k].count; ++i)
+          layers_push[std::size_t(w.contacts[k].vertex[i])] += w.contacts[k].weight[i] * w.contact_impulses[k] * w.contacts[k].normal;
     std::vector<char> pulling(w.contacts.size(), 0);
-    bool any = false;
+    bool again = false;  // a pull to release at once
     for (std::size_t k = 0; k < w.contacts.size(); ++k) {
-      if (!held[k]) continue;
-      w.contact_impulses[k] = w.contact_holds[k] * (w.contacts[k].target - normal_velocity(w.contacts[k], &w.solution));
-      if (!(w.contact_impulses[k] < 0)) continue;
-      // A pull too weak to move its vertices by a negligible distance within the step stays
-      // held (not worth solving again); a stronger one is released.
+      if (!held[k] || !(w.contact_impulses[k] < 0)) continue;
       const SolveContact& c = w.contacts[k];
+      Scalar together = 0;  // m/s: what the held layers' contacts do to its sides' normal speed apart
+      for (int i = 0; i < c.count && c.self; ++i)
+        together += c.weight[i] * layers_push[std::size_t(c.vertex[i])].dot(c.normal) / m.masses[std::size_t(c.vertex[i])];
+      // A pull too weak to move its vertices by a negligible distance within the step stays
+      // held (not worth releasing); a stronger one is released.
       Scalar mass = 0;
       for (int i = 0; i < c.count; ++i) mass = std::max(mass, m.masses[std::size_t(c.vertex[i])]);
-      if (-w.contact_impulses[k] * h > mass * NEGLIGIBLE_MOTION * m.scene.collisions.thickness)
-        pulling[k] = 1, held[k] = 0, any = true;
-      w.contact_impulses[k] = 0;
+      if ((!c.self || together < 0) && -w.contact_impulses[k] * h > mass * NEGLIGIBLE_MOTION * m.scene.collisions.thickness) {
+        pulling[k] = 1;
+        if (c.self || c.target != 0) again = true;
+      }
+      w.contact_impulses[k] = 0;  // a pull: counted as no force
     }
-    if (!any || attempt == 1) break;
+    // A contact released at once whose sides now close is held again (an active set: releasing
+    // some pulls moves the load onto others, and a pair let go may then close).
+    std::vector<char> closing(w.contacts.size(), 0);
+    for (std::size_t k = 0; k < w.contacts.size(); ++k)
+      if (released_now[k] && h * (w.contacts[k].target - normal_velocity(w.contacts[k], &w.solution)) >
+                                 NEGLIGIBLE_MOTION * m.scene.collisions.thickness)
+        closing[k] = 1, again = true;
+    // Pulling, they are not held by the response's spread either (contact_held).
+    for (std::size_t k = 0; k < w.contacts.size(); ++k)
+      if (pulling[k]) held[k] = 0;
+    if (!again || attempt == m.scene.solver.release_solves) {
+      for (std::size_t k = 0; k < w.contacts.size(); ++k)
+        if (pulling[k]) w.lagged.released.emplace_back(contact_key(w.contacts[k]), w.contacts[k].normal);
+      break;
+    }
     hold_contacts(-1, pulling);
+    hold_contacts(1, closing);
+    for (std::size_t k = 0; k < w.contacts.size(); ++k) {
+      if (pulling[k]) released_now[k] = 1;
+      if (closing[k]) released_now[k] = 0, held[k] = 1;
+    }
   }
+  std::sort(w.lagged.released.begin(), w.lagged.released.end(), [](const auto& x, const auto& y) { return x.first < y.first; });
   w.contact_held = held;
   // The work the held contacts did on the cloth at moving obstacles' velocities (their normal
   // impulses and their friction), for the step's energy ledger: zero on still obstacles.
@@ -240,7 +297,7 @@ bool Integrator::solve_linearised(State& state, const std::vector<Vec3>& pinned_
   w.lagged.self_impulses.clear();
   for (std::size_t k = 0; k < w.contacts.size(); ++k)
     if (w.contacts[k].self && w.contact_impulses[k] > 0)
-      w.lagged.self_impulses.emplace(self_contact_key(w.contacts[k]), std::make_pair(w.contact_impulses[k], h));
+      w.lagged.self_impulses.emplace(contact_key(w.contacts[k]), std::make_pair(w.contact_impulses[k], h));
   // The normal forces of the obstacles' contacts, for the next step's friction.
   w.lagged.normal_force.assign(std::size_t(n), 0);
   for (std::size_t k = 0; k < w.contacts.size(); ++k)

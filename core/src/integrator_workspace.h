@@ -60,6 +60,13 @@ inline constexpr int STRAIN_LIMIT_SWEEPS = 200;
 inline constexpr Scalar STRAIN_SLACK = 0.002;
 inline constexpr int STRAIN_RESPONSE_ROUNDS = 16;
 
+// A contact, the same from step to step: its cloth vertices and its kind (the cloth with
+// itself: a vertex and a face have one positive weight, two edges two; 2: an obstacle's, whose
+// contacts with the same vertices differ by their normals).
+inline std::array<int, 5> contact_key(const SolveContact& c) {
+  return {c.vertex[0], c.vertex[1], c.vertex[2], c.vertex[3], c.self ? (c.weight[1] < 0 ? 0 : 1) : 2};
+}
+
 // The system matrix over the free vertices, with the place of every 3x3 block in its
 // compressed storage: a block (a, b) occupies rows 3a..3a+2 of columns 3b..3b+2, and the three
 // rows of one column are contiguous, so the offset of row 3a in each column is enough.
@@ -105,8 +112,18 @@ struct Integrator::Workspace {
   struct Lagged {
     std::vector<Scalar> normal_force;  // per vertex, N: what its obstacle contacts pushed with
     // What each of the cloth's contacts with itself pushed with (those that pushed), by
-    // self_contact_key: its impulse (N s) and that solve's step (s).
+    // contact_key: its impulse (N s) and that solve's step (s).
     std::map<std::array<int, 5>, std::pair<Scalar, Scalar>> self_impulses;
+    // The contacts that pulled in the last solve and were not solved again, to be released in
+    // the next: each one's contact_key and normal, sorted by key.
+    std::vector<std::pair<std::array<int, 5>, Vec3>> released;
+    bool is_released(const SolveContact& c) const {
+      const std::array<int, 5> key = contact_key(c);
+      auto at = std::lower_bound(released.begin(), released.end(), key, [](const auto& r, const auto& k) { return r.first < k; });
+      for (; at != released.end() && at->first == key; ++at)
+        if (at->second.dot(c.normal) > SAME_DIRECTION) return true;
+      return false;
+    }
   };
   Lagged lagged;
 
@@ -143,12 +160,6 @@ struct Integrator::Workspace {
       for (int j = 0; j < c.count; ++j) add_block(contact_blocks[k][i][j], hold * c.weight[i] * c.weight[j] * nn);
   }
 };
-
-// A contact of the cloth with itself, the same from step to step: its vertices and its kind
-// (a vertex and a face have one positive weight, two edges two).
-inline std::array<int, 5> self_contact_key(const SolveContact& c) {
-  return {c.vertex[0], c.vertex[1], c.vertex[2], c.vertex[3], c.weight[1] < 0 ? 0 : 1};
-}
 
 // Each vertex's obstacle contact of largest weight among contacts (-1: none), for its friction
 // (the cloth's contacts with itself have theirs in the response).

@@ -268,7 +268,7 @@ Scene parse_scene(const std::string& text, const std::filesystem::path& file) {
   if (n.has("friction")) s.friction = n.at("friction").up_to(MAX_COEFFICIENT, "", true);
   if (n.has("solver")) {
     const Node v = n.at("solver");
-    v.allow({"type", "tolerance", "max_iterations", "max_halvings", "iterations", "chebyshev", "history", "factor_reuse"});
+    v.allow({"type", "tolerance", "max_iterations", "max_halvings", "iterations", "chebyshev", "history", "factor_reuse", "release_solves"});
     if (v.has("type")) {
       const std::string type = v.at("type").one_of({"cholmod", "cg", "projective"});
       s.solver.kind = type == "cg" ? SolverKind::ConjugateGradient
@@ -282,6 +282,7 @@ Scene parse_scene(const std::string& text, const std::filesystem::path& file) {
     if (v.has("max_halvings")) s.solver.max_halvings = v.at("max_halvings").integer_in(0, 10);
     if (v.has("iterations")) s.solver.iterations = v.at("iterations").integer_in(1, MAX_PROJECTIVE_ITERATIONS);
     if (v.has("factor_reuse")) s.solver.factor_reuse = v.at("factor_reuse").integer_in(0, MAX_FACTOR_REUSE);
+    if (v.has("release_solves")) s.solver.release_solves = v.at("release_solves").integer_in(0, MAX_RELEASE_SOLVES);
     if (v.has("history")) s.solver.history = v.at("history").integer_in(0, MAX_PROJECTIVE_HISTORY);
     if (v.has("chebyshev")) s.solver.chebyshev = v.at("chebyshev").number_in(0, MAX_CHEBYSHEV_RHO, "from 0 to 0.9999");
   }

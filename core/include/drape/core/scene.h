@@ -45,6 +45,7 @@ inline constexpr Scalar MAX_SHEAR_LOCKING_ANGLE = 89;  ///< material.shear_locki
 inline constexpr Scalar MAX_CHEBYSHEV_RHO = 0.9999;     ///< solver.chebyshev
 inline constexpr int MAX_PROJECTIVE_HISTORY = 100;        ///< solver.history
 inline constexpr int MAX_FACTOR_REUSE = 1000;             ///< solver.factor_reuse
+inline constexpr int MAX_RELEASE_SOLVES = 100;            ///< solver.release_solves
 inline constexpr Scalar MAX_THICKNESS_OF_CLOTH = 0.25;  ///< collisions.thickness at most this times each cloth's diagonal
 inline constexpr Scalar MAX_AREAL_DENSITY = 1e6;    ///< kg/m^2: material.density (1e9 g/m^2 as mass_per_area)
 inline constexpr Scalar MAX_STIFFNESS = 1e9;        ///< N/m (tensile, shear) or N (stretch, shear, bend springs)
@@ -198,6 +199,11 @@ struct SolverSpec {
   /// A step that makes energy (beyond a tolerance) is taken again in 2, 4, ... parts, at most
   /// 2^max_halvings (Integrator::step); 0 takes every step as it comes.
   int max_halvings = 3;
+  /// cholmod: how many times a step may be solved again to release contacts held in the solve
+  /// whose force pulls, between the cloth's layers or at a moving obstacle (a still
+  /// obstacle's pull alone is released at the next step); 0 releases every pull at the next
+  /// step.
+  int release_solves = 1;
   /// projective: iterations a step, each one back-substitution with the run's factorisation
   /// and one pass over the springs (more when L-BFGS shortens its step).
   int iterations = 10;
