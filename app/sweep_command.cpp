@@ -66,6 +66,8 @@ int sweep(const SweepArguments& args, const Ranks& ranks) {
                               ? args.reference_steps
                               : 2 * *std::max_element(grid.frame_steps.begin(), grid.frame_steps.end());
   reference.solver.kind = SolverKind::Cholmod;
+  for (const SolverSpec& tried : grid.solvers)
+    if (tried.kind == SolverKind::Cholmod) reference.solver.release_solves = std::max(reference.solver.release_solves, tried.release_solves);
   reference.method = ccd::Method::Conservative;
   reference.max_impulse_iterations =
       std::max(scene.collisions.max_impulse_iterations,
@@ -185,7 +187,7 @@ Command add_sweep_command(CLI::App& app) {
   cmd->add_option("--steps", args->steps, "Steps per frame to try (default: half, once and twice the scene's)")
       ->delimiter(',')
       ->check(CLI::Range(1, 10000));
-  cmd->add_option("--solvers", args->solvers, "Solvers to try: cholmod, cg or cg:TOLERANCE, projective or projective:NAME=VALUE[:NAME=VALUE...] with iterations, history, tolerance, chebyshev (docs/sweep.md)")
+  cmd->add_option("--solvers", args->solvers, "Solvers to try: cholmod or cholmod:release_solves=N, cg or cg:TOLERANCE, projective or projective:NAME=VALUE[:NAME=VALUE...] with iterations, history, tolerance, chebyshev (docs/sweep.md)")
       ->delimiter(',')
       ->capture_default_str();
   cmd->add_option("--methods", args->methods, "CCD methods to try")

@@ -25,7 +25,7 @@ namespace drape {
 std::string SweepSetting::label() const {
   std::ostringstream out;
   out << "steps=" << frame_steps << " solver=";
-  if (solver.kind == SolverKind::Cholmod) out << "cholmod";
+  if (solver.kind == SolverKind::Cholmod) out << "cholmod:release_solves=" << solver.release_solves;
   else if (solver.kind == SolverKind::Projective)
     out << "projective:iterations=" << solver.iterations << ":history=" << solver.history
         << ":tolerance=" << solver.tolerance << ":chebyshev=" << solver.chebyshev;
@@ -71,8 +71,16 @@ std::optional<double> whole_number(const std::string& text) {
 
 SolverSpec parse_solver_setting(const std::string& text, const SolverSpec& scene_default) {
   SolverSpec spec = scene_default;
-  if (text == "cholmod") {
+  if (text == "cholmod" || text.rfind("cholmod:", 0) == 0) {
     spec.kind = SolverKind::Cholmod;
+    if (text != "cholmod") {
+      const std::string prefix = "cholmod:release_solves=";
+      const auto value = text.rfind(prefix, 0) == 0 ? whole_number(text.substr(prefix.size())) : std::nullopt;
+      if (!value || !(*value >= 0 && *value <= MAX_RELEASE_SOLVES && *value == std::floor(*value)))
+        throw std::invalid_argument("'" + text + "': expected cholmod or cholmod:release_solves=N with N from 0 to " +
+                                    std::to_string(MAX_RELEASE_SOLVES));
+      spec.release_solves = int(*value);
+    }
     return spec;
   }
   // A setting of another type than the scene's starts from that type's defaults.
@@ -112,7 +120,7 @@ SolverSpec parse_solver_setting(const std::string& text, const SolverSpec& scene
     if (text.back() == ':') throw std::invalid_argument("'" + text + expected);
     return spec;
   }
-  throw std::invalid_argument("'" + text + "': expected cholmod, cg, cg:TOLERANCE, projective or projective:NAME=VALUE[:NAME=VALUE...] (iterations, history, tolerance, chebyshev)");
+  throw std::invalid_argument("'" + text + "': expected cholmod, cholmod:release_solves=N, cg, cg:TOLERANCE, projective or projective:NAME=VALUE[:NAME=VALUE...] (iterations, history, tolerance, chebyshev)");
 }
 
 namespace {
@@ -234,8 +242,8 @@ std::filesystem::path run_folder(const SweepPlan& plan, std::size_t run) {
 nlohmann::json identity(const SweepPlan& plan, std::size_t run) {
   const SweepSetting& s = plan.setting(run);
   char exact[256];
-  std::snprintf(exact, sizeof exact, "%d %d %.17g %d %d %.17g %s %.17g %d %d %d", s.frame_steps, int(s.solver.kind),
-                double(s.solver.tolerance), s.solver.iterations, s.solver.history, double(s.solver.chebyshev),
+  std::snprintf(exact, sizeof exact, "%d %d %.17g %d %d %.17g %d %s %.17g %d %d %d", s.frame_steps, int(s.solver.kind),
+                double(s.solver.tolerance), s.solver.iterations, s.solver.history, double(s.solver.chebyshev), s.solver.release_solves,
                 std::string(ccd::method_name(s.method)).c_str(), double(s.thickness), s.max_impulse_iterations,
                 s.max_zone_iterations, int(s.self_in_solve));
   return {{"setting", s.label()}, {"exact", exact}, {"reference", run == 0}, {"frames", plan.frames},
@@ -341,7 +349,7 @@ void mark_pareto_front(std::vector<SweepResult>& results) {
 }
 
 std::string sweep_csv_header() {
-  return "reference,frame_steps,solver,tolerance,projective_iterations,projective_history,chebyshev,method,thickness,max_impulse_iterations,max_zone_iterations,self_in_solve,frames_done,failed,"
+  return "reference,frame_steps,solver,tolerance,projective_iterations,projective_history,chebyshev,release_solves,method,thickness,max_impulse_iterations,max_zone_iterations,self_in_solve,frames_done,failed,"
          "wall_ms_per_frame,rms_error_m,max_error_m,energy_error_j,energy_drift_j,penetrations,pareto,failure";
 }
 
@@ -351,10 +359,11 @@ std::string sweep_csv_row(const SweepResult& r) {
   std::replace(failure.begin(), failure.end(), '"', '\'');
   char row[512];
   const bool cg = s.solver.kind == SolverKind::ConjugateGradient, projective = s.solver.kind == SolverKind::Projective;
-  std::snprintf(row, sizeof row, "%d,%d,%s,%.3g,%d,%d,%.6g,%s,%.6g,%d,%d,%d,%d,%d,%.3f,%.6e,%.6e,%.6e,%.6e,%ld,%d,", int(r.reference),
+  std::snprintf(row, sizeof row, "%d,%d,%s,%.3g,%d,%d,%.6g,%d,%s,%.6g,%d,%d,%d,%d,%d,%.3f,%.6e,%.6e,%.6e,%.6e,%ld,%d,", int(r.reference),
                 s.frame_steps, cg ? "cg" : projective ? "projective" : "cholmod",
                 cg || projective ? double(s.solver.tolerance) : 0.0, projective ? s.solver.iterations : 0,
                 projective ? s.solver.history : 0, projective && s.solver.history == 0 ? double(s.solver.chebyshev) : 0.0,
+                s.solver.kind == SolverKind::Cholmod ? s.solver.release_solves : 0,
                 std::string(ccd::method_name(s.method)).c_str(), double(s.thickness), s.max_impulse_iterations,
                 s.max_zone_iterations, int(s.self_in_solve), r.frames_done, int(r.failed), r.wall_ms_per_frame, r.rms_error, r.max_error, r.energy_error,
                 r.energy_drift, r.penetrations, int(r.pareto));

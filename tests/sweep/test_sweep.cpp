@@ -38,13 +38,16 @@ TEST(Sweep, GridIsTheProductOfTheKnobs) {
   grid.self_in_solve = {true, false};
   const auto settings = grid.settings();
   EXPECT_EQ(settings.size(), 3u * 3 * 2 * 1 * 2 * 1 * 2);
-  EXPECT_EQ(settings.front().label(), "steps=5 solver=cholmod ccd=vincent thickness=0.005 impulses=4 zones=16 self_in_solve=on");
+  EXPECT_EQ(settings.front().label(), "steps=5 solver=cholmod:release_solves=1 ccd=vincent thickness=0.005 impulses=4 zones=16 self_in_solve=on");
   EXPECT_EQ(settings.back().label(), "steps=20 solver=projective:iterations=10:history=5:tolerance=1e-08:chebyshev=0.99 ccd=conservative thickness=0.005 impulses=8 zones=16 self_in_solve=off");
 }
 
 TEST(Sweep, SolverSettings) {
   const SolverSpec scene{SolverKind::Cholmod, 1e-8, 500};
   EXPECT_EQ(parse_solver_setting("cholmod", scene).kind, SolverKind::Cholmod);
+  EXPECT_EQ(parse_solver_setting("cholmod", scene).release_solves, scene.release_solves);
+  EXPECT_EQ(parse_solver_setting("cholmod:release_solves=0", scene).release_solves, 0);
+  EXPECT_EQ(parse_solver_setting("cholmod:release_solves=8", scene).release_solves, 8);
   const SolverSpec cg = parse_solver_setting("cg", scene);
   EXPECT_EQ(cg.kind, SolverKind::ConjugateGradient);
   EXPECT_EQ(cg.tolerance, 1e-8);
@@ -62,7 +65,8 @@ TEST(Sweep, SolverSettings) {
   EXPECT_EQ(parse_solver_setting("projective:iterations=5", scene).iterations, 5);
   EXPECT_EQ(parse_solver_setting("projective:iterations=5", scene).chebyshev, scene.chebyshev);
   EXPECT_EQ(parse_solver_setting("projective", scene).iterations, scene.iterations);
-  for (const char* bad : {"lu", "cg:", "cg:abc", "cg:0", "cg:2", "cg:1e-3x", "cholmod:1", "projective:", "projective:0",
+  for (const char* bad : {"lu", "cg:", "cg:abc", "cg:0", "cg:2", "cg:1e-3x", "cholmod:1", "cholmod:", "cholmod:release_solves=", "cholmod:release_solves=-1",
+                          "cholmod:release_solves=1.5", "cholmod:release_solves=101", "cholmod:iterations=2", "projective:", "projective:0",
                           "projective:10", "projective:10:0.9", "projective:iterations=0", "projective:iterations=2.5",
                           "projective:chebyshev=1", "projective:chebyshev=-0.1", "projective:history=101",
                           "projective:tolerance=2", "projective:iterations=", "projective:speed=3",
