@@ -14,11 +14,7 @@ TEST(SweepCommand, WritesTheTableAndThePlot) {
                                 "--methods vincent --out " + out.string());
   ASSERT_EQ(run.status, 0) << run.output;
   EXPECT_NE(run.output.find("Pareto front"), std::string::npos) << run.output;
-  std::ifstream csv(out / "sweep.csv");
-  std::string line;
-  int lines = 0;
-  while (std::getline(csv, line)) ++lines;
-  EXPECT_EQ(lines, 1 + 1 + 4);  // header, reference, 2 x 2 settings
+  EXPECT_EQ(lines(out / "sweep.csv").size(), 1u + 1 + 4);  // header, reference, 2 x 2 settings
   ASSERT_TRUE(fs::exists(out / "sweep.png"));
   std::ifstream png(out / "sweep.png", std::ios::binary);
   char magic[4] = {};
@@ -61,11 +57,7 @@ TEST(SweepCommand, SelfContactsInTheSolveAreAKnob) {
   ASSERT_EQ(run.status, 0) << run.output;
   EXPECT_NE(run.output.find("self_in_solve=on"), std::string::npos) << run.output;
   EXPECT_NE(run.output.find("self_in_solve=off"), std::string::npos) << run.output;
-  std::ifstream csv(out / "sweep.csv");
-  std::string header, line;
-  std::getline(csv, header);
-  EXPECT_NE(header.find(",max_zone_iterations,self_in_solve,frames_done,"), std::string::npos) << header;
-  int lines = 0;
-  while (std::getline(csv, line)) ++lines;
-  EXPECT_EQ(lines, 1 + 2);  // reference, on and off
+  const std::vector<std::string> table = lines(out / "sweep.csv");
+  ASSERT_EQ(table.size(), 1u + 1 + 2);  // header, reference, on and off
+  EXPECT_NE(table[0].find(",max_zone_iterations,self_in_solve,frames_done,"), std::string::npos) << table[0];
 }
