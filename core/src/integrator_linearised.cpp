@@ -270,7 +270,7 @@ bool Integrator::solve_linearised(State& state, const std::vector<Vec3>& pinned_
         closing[k] = 1, again = true;
     // Pulling, they are not held by the response's spread either (contact_held).
     for (std::size_t k = 0; k < w.contacts.size(); ++k)
-      if (pulling[k]) held[k] = 0;
+      if (pulling[k]) held[k] = 0, released_now[k] = 1;
     if (!again || attempt == m.scene.solver.release_solves) {
       for (std::size_t k = 0; k < w.contacts.size(); ++k)
         if (pulling[k]) w.lagged.released.emplace_back(contact_key(w.contacts[k]), w.contacts[k].normal);
@@ -278,10 +278,8 @@ bool Integrator::solve_linearised(State& state, const std::vector<Vec3>& pinned_
     }
     hold_contacts(-1, pulling);
     hold_contacts(1, closing);
-    for (std::size_t k = 0; k < w.contacts.size(); ++k) {
-      if (pulling[k]) released_now[k] = 1;
-      if (closing[k]) released_now[k] = 0, held[k] = 1;
-    }
+    for (std::size_t k = 0; k < w.contacts.size(); ++k)
+      if (closing[k]) held[k] = 1, released_now[k] = 0;
   }
   std::sort(w.lagged.released.begin(), w.lagged.released.end(), [](const auto& x, const auto& y) { return x.first < y.first; });
   w.contact_held = held;
