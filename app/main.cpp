@@ -4,8 +4,10 @@
 #include <map>
 
 #include "commands.h"
+#include "drape/core/linear_solver.h"
 
 int main(int argc, char** argv) {
+  drape::keep_freed_memory();
   CLI::App app{
       "drape: cloth simulation with continuous collision detection.\n"
       "Run 'drape <command> --help' for the options of a command.",

@@ -7,6 +7,7 @@
 #include <chrono>
 #include <cstdio>
 
+#include "drape/core/linear_solver.h"
 #include "drape/ccd_eval/evaluation.h"
 #include "child_process.h"
 #include "drape/core/integrator.h"
@@ -69,6 +70,7 @@ Measurement measure(int cells, const char* solver, int steps) {
 }  // namespace
 
 int main(int argc, char** argv) {
+  drape::keep_freed_memory();  // as the drape program does
   CLI::App app{"Milliseconds per implicit cloth step and peak memory: CHOLMOD beside CG on large grids."};
   int steps = 5;
   std::vector<int> sizes{100, 200};

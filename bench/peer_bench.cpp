@@ -321,6 +321,7 @@ void print_row(const std::string& side, const Result& r, const Result* bullet) {
 }  // namespace
 
 int main(int argc, char** argv) {
+  drape::keep_freed_memory();  // as the drape program does
   CLI::App app{"Whole frames of drape beside Bullet's soft body on the same cloth-on-sphere scenes, in one run."};
   std::vector<std::string> case_names{"small", "fast", "large", "large-self"};
   std::vector<std::string> solvers{"projective", "cholmod"};

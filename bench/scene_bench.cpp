@@ -15,6 +15,7 @@
 #include <memory>
 #include <tuple>
 
+#include "drape/core/linear_solver.h"
 #include "drape/ccd/broad_phase.h"
 #include "drape/ccd_eval/evaluation.h"
 #include "drape/ccd/patch_tree.h"
@@ -238,6 +239,7 @@ void dump_frame(const Frame& frame, const fs::path& dir, const std::string& stem
 }  // namespace
 
 int main(int argc, char** argv) {
+  drape::keep_freed_memory();  // as the drape program does
   CLI::App app{
       "The paper's cloth benchmark on a scene: runs it once and, at the measured frames, times every CCD method "
       "on the identical elementary tests of the frame (every detection round of each of its steps), with cull "

@@ -4,6 +4,11 @@
 #include <Eigen/IterativeLinearSolvers>
 #include <omp.h>
 
+#include <limits>
+#ifdef __GLIBC__
+#include <malloc.h>
+#endif
+
 namespace drape {
 namespace {
 
@@ -125,6 +130,15 @@ class ConjugateGradientSolver final : public LinearSolver {
 };
 
 }  // namespace
+
+void keep_freed_memory() {
+#ifdef __GLIBC__
+  // Allocations up to 32 MiB (glibc's largest threshold on 64-bit) from the heap, not mmap;
+  // and the heap's free top never returned with brk.
+  mallopt(M_MMAP_THRESHOLD, 32 * 1024 * 1024);
+  mallopt(M_TRIM_THRESHOLD, std::numeric_limits<int>::max());
+#endif
+}
 
 // CHOLMOD (SuiteSparse 5) runs parts of its supernodal factorisation in OpenMP regions with
 // a fixed num_threads(4) clause, which neither omp_set_num_threads nor OMP_NUM_THREADS can
