@@ -44,7 +44,6 @@ std::string lifted(bool on_cloth, const std::string& solver = "") {
 }
 
 struct Lift {
-  long proximity = 0;                 // the response's proximity impulses over the run
   Scalar lower_highest = 0;           // m: the highest vertex of the cloth underneath (on_cloth)
   std::vector<Scalar> lifted_rows;    // m: the lifted cloth's lowest vertex in each row along y
 };
@@ -57,7 +56,6 @@ Lift run(const std::string& json, int steps) {
   for (int s = 0; s < steps; ++s) {
     const StepReport r = integrator.step(state);
     EXPECT_TRUE(r.ok) << r.failure;
-    lift.proximity += r.collisions.proximity_impulses;
   }
   const std::size_t cloth = std::size_t(ROW * ROW), first = model.masses.size() - cloth;  // the lifted cloth comes last
   for (std::size_t v = 0; v < first; ++v) lift.lower_highest = std::max(lift.lower_highest, state.positions[v].z());
@@ -76,9 +74,10 @@ TEST(ContactRelease, AClothLiftedOffAnotherLeavesItOnTheGroundWhenSolvedAgainUnt
   // docs/collisions.md.)
   const Lift lift = run(lifted(true, R"(, "release_solves": 4)"), 80);
   EXPECT_LT(lift.lower_highest, 1.5 * THICKNESS);
-  // The released pairs that close are held again, not left to the response (104 proximity
-  // impulses over the run; left, 422).
-  EXPECT_LT(lift.proximity, 200);
+  // (The response's proximity impulses over the run are not a measure of it: with the same
+  // code they ranged from 17 to 913 by OpenBLAS's kernels alone (Zen, Haswell, Nehalem,
+  // Sandybridge, Prescott: rounding parts the runs from the second frame), and one solve a
+  // step, whose lower cloth rises 6.6 cm, gave 41 to 64.)
   // The lifted cloth has left it: its row next to the edge well above, its far rows on it.
   EXPECT_GT(lift.lifted_rows[CELLS - 1], 0.05);
   EXPECT_LT(lift.lifted_rows[0], 4 * THICKNESS);
