@@ -195,7 +195,7 @@ struct SolverSpec {
   /// solve may take (until its preconditioned residual norm is 1e-10 of the right-hand
   /// side's: the error in the matrix's norm) before its own matrix is factorised; 0 factorises
   /// every solve.
-  int factor_reuse = 8;
+  int factor_reuse = 1;
   /// A step that makes energy (beyond a tolerance) is taken again in 2, 4, ... parts, at most
   /// 2^max_halvings (Integrator::step); 0 takes every step as it comes.
   int max_halvings = 3;
