@@ -19,7 +19,7 @@ namespace drape {
 /// elsewhere), for programs that factorise every step: CHOLMOD allocates its permuted copy of
 /// the matrix and its workspace in each factorisation, and with glibc's defaults that memory
 /// went back to the kernel and was faulted in again the next time (the pile's first 22 frames:
-/// 377,000 page faults, 26.8 s; kept, 28,000 and 22.3 s, the same results). The resident
+/// 377,000 page faults, 26.1 s; kept, 28,000 and 21.2 s, the same results). The resident
 /// memory then stays at its peak. Call once, before the first step (the drape program and the
 /// benchmarks that time it do).
 void keep_freed_memory();
