@@ -169,7 +169,17 @@ struct CholmodFactor::Impl {
   std::vector<SparseMatrix::StorageIndex> outer, inner;
 };
 
-CholmodFactor::CholmodFactor(Use use) : impl_(std::make_unique<Impl>()), use_(use) {}
+CholmodFactor::CholmodFactor(Use use) : impl_(std::make_unique<Impl>()), use_(use) {
+  // Supernodes amalgamated more than CHOLMOD's defaults (columns 4, 16, 48 and zeros 0.8, 0.1,
+  // 0.05) allow: the system's 3 x 3 blocks make many small supernodes, each a few OpenMP
+  // regions whose barrier (a team of one thread, above) still costs a futex system call, and
+  // small BLAS calls. Measured, the solve of the default scene's first 12 frames 1,156 -> 935
+  // ms, of the pile's first 6 frames 2,555 -> 2,330 ms (medians of 3 and 4 alternating runs);
+  // 8, 32, 96 and 32, 64, 128 did no better. Read by each supernodal analysis.
+  cholmod_common& c = impl_->llt.cholmod();
+  c.nrelax[0] = 16, c.nrelax[1] = 64, c.nrelax[2] = 128;
+  c.zrelax[0] = 0.8, c.zrelax[1] = 0.2, c.zrelax[2] = 0.1;
+}
 CholmodFactor::~CholmodFactor() = default;
 CholmodFactor::CholmodFactor(CholmodFactor&&) noexcept = default;
 CholmodFactor& CholmodFactor::operator=(CholmodFactor&&) noexcept = default;
@@ -192,15 +202,7 @@ bool CholmodFactor::factorise(const SparseMatrix& A) {
     // the faster ones (docs/solvers.md). CHOLMOD's analysis in its automatic mode takes that
     // rule; a simplicial pick is analysed again as LL' (automatic mode would factorise LDL').
     f.llt.setMode(use_ == Use::Refactorised ? Eigen::CholmodAuto : Eigen::CholmodSimplicialLLt);
-    // Supernodes amalgamated more than CHOLMOD's defaults (columns 4, 16, 48 and zeros 0.8,
-    // 0.1, 0.05) allow: the system's 3 x 3 blocks make many small supernodes, each a few
-    // OpenMP regions whose barrier (a team of one thread, as above) still costs a futex
-    // system call, and small BLAS calls. Measured, the solve of the default scene's first 12
-    // frames 1,156 -> 935 ms, of the pile's first 6 frames 2,555 -> 2,330 ms (medians of 3
-    // and 4 alternating runs); 8, 32, 96 and 32, 64, 128 did no better.
-    cholmod_common& c = f.llt.cholmod();
-    c.nrelax[0] = 16, c.nrelax[1] = 64, c.nrelax[2] = 128;
-    c.zrelax[0] = 0.8, c.zrelax[1] = 0.2, c.zrelax[2] = 0.1;
+    const cholmod_common& c = f.llt.cholmod();
     f.llt.analyzePattern(A);
     if (use_ == Use::Refactorised && !(c.lnz > 0 && c.fl / c.lnz >= c.supernodal_switch)) {
       f.llt.setMode(Eigen::CholmodSimplicialLLt);

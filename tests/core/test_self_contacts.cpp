@@ -20,12 +20,12 @@ namespace {
 
 constexpr Scalar THICKNESS = 0.005;  // m
 
-// Two square layers of 10 x 10 quads (2 cm), gap apart, the upper shifted by shift (a third of a quad)
+// Two square layers of 10 x 10 quads (2 cm), gap apart, the upper shifted by upper_shift (a third of a quad)
 // so that its vertices lie over the lower's faces: the lower of density 0.2 kg/m^2 moving up at
 // 0.2 m/s, the upper of 0.1 kg/m^2 down at 0.8 m/s (a momentum of their own, which the contacts
 // must keep: no air to take it), or with falling, both dropping together at 0.5 m/s under
 // gravity.
-std::string layers(bool in_solve, Scalar gap, bool falling = false, Scalar shift = 0.2 / 30) {
+std::string layers(bool in_solve, Scalar gap, bool falling = false, Scalar upper_shift = 0.2 / 30) {
   std::ostringstream s;
   s.precision(17);
   const auto cloth = [&](Scalar shift, Scalar z, Scalar vz, Scalar density) {
@@ -36,7 +36,7 @@ std::string layers(bool in_solve, Scalar gap, bool falling = false, Scalar shift
   s << R"({"frame_time": 0.02, "frame_steps": 4, "gravity": [0, 0, )" << (falling ? -9.81 : 0) << R"(], "cloths": [)";
   cloth(0, 0.5, falling ? -0.5 : 0.2, 0.2);
   s << ", ";
-  cloth(shift, 0.5 + gap, falling ? -0.5 : -0.8, 0.1);
+  cloth(upper_shift, 0.5 + gap, falling ? -0.5 : -0.8, 0.1);
   s << R"(], "collisions": {"self": true, "thickness": )" << THICKNESS << R"(, "self_in_solve": )" << (in_solve ? "true" : "false")
     << R"(}, "solver": {"type": "cholmod"}})";
   return s.str();
