@@ -22,6 +22,10 @@ std::atomic<bool> render_interrupted{false};
 extern "C" void on_render_interrupt(int) { render_interrupted.store(true); }
 
 int render_run(const fs::path& folder, const RenderOptions& options) {
+  // Ctrl-C finishes the frame in hand and stops: no partial image, an earlier video kept. Caught
+  // from the start, so that one during the run folder's reading or OpenGL's start stops cleanly too.
+  std::signal(SIGINT, on_render_interrupt);
+  std::signal(SIGTERM, on_render_interrupt);
   std::optional<RunFolder> run = open_run_folder(folder, "render");
   if (!run) return EXIT_BAD_INPUT;
   const Model& model = run->model;
@@ -77,9 +81,6 @@ int render_run(const fs::path& folder, const RenderOptions& options) {
     const auto begin = std::chrono::steady_clock::now();
     const bool terminal = isatty(STDERR_FILENO);
     std::size_t done = 0;
-    // Ctrl-C finishes the frame in hand and stops: no partial image, an earlier video kept.
-    std::signal(SIGINT, on_render_interrupt);
-    std::signal(SIGTERM, on_render_interrupt);
     for (const auto& [frame, path] : frames) {
       if (render_interrupted.load()) {
         video.reset();  // removes the unfinished video
