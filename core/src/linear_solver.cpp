@@ -150,6 +150,22 @@ namespace {
 void serial_openmp() { omp_set_max_active_levels(0); }
 }  // namespace
 
+// Run serially, each of CHOLMOD's regions still went through a team of one thread, whose
+// barrier at the region's end wakes the (absent) others with a futex system call: about 500
+// calls a step on the default scene, 4-6 % of its samples in the kernel and 2 % in libgomp
+// (perf). This definition takes the place of libgomp's entry point for a parallel region (the
+// one libcholmod calls, GOMP_parallel@GOMP_4.0; the executable's definition comes first in
+// the dynamic linker's lookup, as an LD_PRELOAD's would): the region's body runs on the calling
+// thread with no team, as an orphaned construct does, where omp_get_num_threads() is 1 and
+// omp_get_thread_num() 0, so CHOLMOD's static loops give it every iteration. Measured (20
+// frames of the default scene, 8 of the pile, `drape run`, medians of 5 alternating runs by
+// farm-bench): 0.872x and 0.885x the time without it, the same results to the bit.
+// drape's own parallel work is TBB's; nothing else in the process runs OpenMP regions in its
+// Debian build (OpenBLAS is the pthreads variant).
+extern "C" void GOMP_parallel(void (*body)(void*), void* data, unsigned /*num_threads*/, unsigned /*flags*/) {
+  body(data);
+}
+
 struct CholmodFactor::Impl {
   bool same_pattern(const SparseMatrix& A) const {
     return analyses > 0 && A.rows() == rows && A.nonZeros() == nonzeros &&
@@ -172,8 +188,8 @@ struct CholmodFactor::Impl {
 CholmodFactor::CholmodFactor(Use use) : impl_(std::make_unique<Impl>()), use_(use) {
   // Supernodes amalgamated more than CHOLMOD's defaults (columns 4, 16, 48 and zeros 0.8, 0.1,
   // 0.05) allow: the system's 3 x 3 blocks make many small supernodes, each a few OpenMP
-  // regions whose barrier (a team of one thread, above) still costs a futex system call, and
-  // small BLAS calls. Measured, the solve of the default scene's first 12 frames 1,156 -> 935
+  // regions (whose barrier, a team of one thread, cost a futex system call until GOMP_parallel
+  // above) and small BLAS calls. Measured before that change, the solve of the default scene's first 12 frames 1,156 -> 935
   // ms, of the pile's first 6 frames 2,555 -> 2,330 ms (medians of 3 and 4 alternating runs);
   // 8, 32, 96 and 32, 64, 128 did no better. Read by each supernodal analysis.
   cholmod_common& c = impl_->llt.cholmod();
