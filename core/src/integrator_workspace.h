@@ -114,8 +114,9 @@ struct Integrator::Workspace {
     // What each of the cloth's contacts with itself pushed with (those that pushed), by
     // contact_key: its impulse (N s) and that solve's step (s).
     std::map<std::array<int, 5>, std::pair<Scalar, Scalar>> self_impulses;
-    // The contacts that pulled in the last solve and were not solved again, to be released in
-    // the next: each one's contact_key and normal, sorted by key.
+    // The contacts that pulled when the step's solves ended (and a moving obstacle's released
+    // for its last solve), to be released in the next: each one's contact_key and normal,
+    // sorted by key.
     std::vector<std::pair<std::array<int, 5>, Vec3>> released;
     bool is_released(const SolveContact& c) const {
       const std::array<int, 5> key = contact_key(c);

@@ -145,7 +145,9 @@ void keep_freed_memory() {
 // lower: on a machine with fewer cores its threads spun against each other and the rest of the
 // step (the pile's first 12 frames took 18.1 s, 6.2 of them in the kernel; with the regions
 // serial 7.6 s, the same results). No active parallel level makes every region run on the
-// calling thread; set on each thread that calls CHOLMOD, before each call.
+// calling thread; set on each thread that calls CHOLMOD, before each call. Since drape's own
+// GOMP_parallel (below) a region runs with no team at all; this stays as the fallback should
+// the dynamic linker not take that definition.
 namespace {
 void serial_openmp() { omp_set_max_active_levels(0); }
 }  // namespace
@@ -161,7 +163,7 @@ void serial_openmp() { omp_set_max_active_levels(0); }
 // frames of the default scene, 8 of the pile, `drape run`, medians of 5 alternating runs by
 // farm-bench): 0.872x and 0.885x the time without it, the same results to the bit.
 // drape's own parallel work is TBB's; nothing else in the process runs OpenMP regions in its
-// Debian build (OpenBLAS is the pthreads variant).
+// Debian build (OpenBLAS is the serial variant, tools/install-deps.sh).
 extern "C" void GOMP_parallel(void (*body)(void*), void* data, unsigned /*num_threads*/, unsigned /*flags*/) {
   body(data);
 }
@@ -189,8 +191,9 @@ CholmodFactor::CholmodFactor(Use use) : impl_(std::make_unique<Impl>()), use_(us
   // Supernodes amalgamated more than CHOLMOD's defaults (columns 4, 16, 48 and zeros 0.8, 0.1,
   // 0.05) allow: the system's 3 x 3 blocks make many small supernodes, each a few OpenMP
   // regions (whose barrier, a team of one thread, cost a futex system call until GOMP_parallel
-  // above) and small BLAS calls. Measured before that change, the solve of the default scene's first 12 frames 1,156 -> 935
-  // ms, of the pile's first 6 frames 2,555 -> 2,330 ms (medians of 3 and 4 alternating runs);
+  // above) and small BLAS calls. Measured before that change, the solve of the default scene's
+  // first 12 frames 1,156 -> 935 ms, of the pile's first 6 frames 2,555 -> 2,330 ms (medians of
+  // 3 and 4 alternating runs);
   // 8, 32, 96 and 32, 64, 128 did no better. Read by each supernodal analysis.
   cholmod_common& c = impl_->llt.cholmod();
   c.nrelax[0] = 16, c.nrelax[1] = 64, c.nrelax[2] = 128;

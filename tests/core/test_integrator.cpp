@@ -337,7 +337,7 @@ TEST(Integrator, StrainLimitingHoldsACurtainStruckByAMovingMeshBall) {
           over_limit = std::max(over_limit, (state.positions[s.i] - state.positions[s.j]).norm() / (s.limit * s.rest_length));
     }
     EXPECT_LE(over_limit, 1.01) << speed << " m/s";
-    EXPECT_GT(largest, 1.05) << speed << " m/s";  // struck hard enough to reach the limit
+    EXPECT_GT(largest, 1.09) << speed << " m/s";  // struck hard enough to reach the limit
   }
 }
 
