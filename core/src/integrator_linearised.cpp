@@ -277,7 +277,7 @@ bool Integrator::solve_linearised(State& state, const std::vector<Vec3>& pinned_
       // A moving obstacle's pull still held after the solves again would move its vertices with
       // the obstacle's surface: a curtain wrapped around a mesh ball that went on through it was
       // dragged along by its contacts behind the ball, to 1.55 times its rest length at 6 m/s
-      // and past 2 at 8 m/s with a limit of 1.1
+      // and to 1.71 at 8 m/s with a limit of 1.1
       // (Integrator.StrainLimitingHoldsACurtainStruckByAMovingMeshBall; the analytic sphere's
       // cloth slid off). So those are released and the step solved once more; the pulls that
       // solve finds are released at the next step's, and the pairs it lets close are not held
