@@ -193,8 +193,8 @@ CholmodFactor::CholmodFactor(Use use) : impl_(std::make_unique<Impl>()), use_(us
   // regions (whose barrier, a team of one thread, cost a futex system call until GOMP_parallel
   // above) and small BLAS calls. Measured before that change, the solve of the default scene's
   // first 12 frames 1,156 -> 935 ms, of the pile's first 6 frames 2,555 -> 2,330 ms (medians of
-  // 3 and 4 alternating runs);
-  // 8, 32, 96 and 32, 64, 128 did no better. Read by each supernodal analysis.
+  // 3 and 4 alternating runs); 8, 32, 96 and 32, 64, 128 did no better. Read by each supernodal
+  // analysis.
   cholmod_common& c = impl_->llt.cholmod();
   c.nrelax[0] = 16, c.nrelax[1] = 64, c.nrelax[2] = 128;
   c.zrelax[0] = 0.8, c.zrelax[1] = 0.2, c.zrelax[2] = 0.1;
