@@ -55,7 +55,7 @@ for r in $(seq 1 "$REPEATS"); do
     echo "run $r, $side ($([ "$side" = old ] && echo "$rev" || git rev-parse --short HEAD)): $(awk -v a="$start" -v b="$(date +%s%N)" 'BEGIN { printf "%.1f", (b - a) / 1e9 }') s, status $status"
   done
 done
-# Per heavy frame, from the first repeat of each (the later repeats' totals are printed below).
+# Per heavy frame, from the first repeat of each (every run's own time is printed above).
 # Columns a commit's stats.csv lacks (the earlier one has no broad_ms or narrow_ms) read as 0.
 awk -F, -v old="$rev" '
   function col(name) { return (file, name) in c ? $c[file, name] : 0 }
@@ -91,11 +91,3 @@ awk -F, -v old="$rev" '
     printf "at %s: penetrations %d, warnings %d, largest stretch %.4f; now: penetrations %d, warnings %d, largest stretch %.4f\n", \
       old, pen[1], warn[1], stretch[1], pen[2], warn[2], stretch[2]
   }' "$OUT/old-1/stats.csv" "$OUT/new-1/stats.csv"
-if [ "$REPEATS" -gt 1 ]; then
-  for r in $(seq 1 "$REPEATS"); do
-    for side in old new; do
-      awk -F, -v label="repeat $r, $side" 'NR == 1 { for (i = 1; i <= NF; ++i) c[$i] = i; next } { s += $c["wall_ms"] }
-        END { printf "%s: %.1f s of frames\n", label, s / 1000 }' "$OUT/$side-$r/stats.csv"
-    done
-  done
-fi
