@@ -4,12 +4,14 @@
 # the issue was filed at) from both commits' figures in alternating runs. The earlier commit's
 # drape is built from `git archive` of that commit in OUT (Release, the drape target alone;
 # no worktree is registered), each run uses its own commit's copy of the scene, and the runs
-# alternate (old, new, old, new, ...) under --check. Prints, for each heavy frame (the earlier
-# run has at least a tenth of its most elementary tests there, scene_bench's rule), both runs'
-# wall time, the earlier one's collision pipeline (ccd_ms) and solve, this one's broad and
-# narrow phase and solve, both runs' halvings, and the ratio of the frames' times; then the
-# medians and totals over the heavy frames and each run's penetrations, warnings and largest
-# stretch. A benchmark, not a test: the pile in full took 2.5 to 3 minutes at 8dcf95b, 4 at
+# alternate (old, new, old, new, ...) under --check; "new" is the drape in BUILD_DIR as built,
+# labelled with HEAD. Prints, for each heavy frame of the first repeat (the earlier run has at
+# least a tenth of its most elementary tests there, scene_bench's rule), both runs' wall time,
+# the earlier one's collision pipeline (ccd_ms) and solve, this one's broad and narrow phase
+# and solve, both runs' halvings, and the ratio new / old of the frames' times; then the median
+# and range of that ratio, the totals, the heavy frames whose broad phase costs more than their
+# narrow phase, and each run's penetrations, warnings and largest stretch. Later repeats add
+# only their run times. A benchmark, not a test: the pile in full took 2.5 to 3 minutes at 8dcf95b, 4 at
 # 8f860ac and 27 at b0eb627 (docs/benchmarks.md), plus 2.5 minutes to build the earlier drape.
 # Usage: bench/commits_heavy_frames.sh OLD_REV [BUILD_DIR] [OUT] [SCENE] [FRAMES] [REPEATS]
 # (SCENE relative to the repository's root.)
@@ -46,19 +48,23 @@ frames_flag=()
 for r in $(seq 1 "$REPEATS"); do
   for side in old new; do
     if [ "$side" = old ]; then drape=$OLD_DRAPE scene="$tree/$SCENE"; else drape=$NEW_DRAPE scene=$SCENE; fi
-    # Drape before session 9 has no --overwrite (nor a run folder it would refuse): the folder goes.
-    overwrite=()
-    if "$drape" run --help | grep -q -- --overwrite; then overwrite=(--overwrite); else rm -rf "${OUT:?}/$side-$r"; fi
+    # A fresh folder for every run (drape before session 9 has no --overwrite), so that a run
+    # that fails early leaves no earlier run's stats.csv to be read as its own.
+    rm -rf "${OUT:?}/$side-$r"
     start=$(date +%s%N)
     status=0
-    "$drape" run "$scene" "${frames_flag[@]}" --check --quiet "${overwrite[@]}" --out "$OUT/$side-$r" || status=$?
-    echo "run $r, $side ($([ "$side" = old ] && echo "$rev" || git rev-parse --short HEAD)): $(awk -v a="$start" -v b="$(date +%s%N)" 'BEGIN { printf "%.1f", (b - a) / 1e9 }') s, status $status"
+    "$drape" run "$scene" "${frames_flag[@]}" --check --quiet --out "$OUT/$side-$r" || status=$?
+    echo "run $r, $side ($([ "$side" = old ] && echo "$rev" || echo "this build, $BUILD_DIR, HEAD $(git rev-parse --short HEAD)")): $(awk -v a="$start" -v b="$(date +%s%N)" 'BEGIN { printf "%.1f", (b - a) / 1e9 }') s, status $status"
+    if [ "$status" = 2 ]; then echo "commits_heavy_frames.sh: the $side run refused its input (status 2): no table" >&2; exit 1; fi
   done
 done
 # Per heavy frame, from the first repeat of each (every run's own time is printed above).
-# Columns a commit's stats.csv lacks (the earlier one has no broad_ms or narrow_ms) read as 0.
+# Columns a commit's stats.csv lacks (the earlier one may have no broad_ms, narrow_ms,
+# step_halvings or warnings) read as 0 in the sums and print as n/a in the summary.
 awk -F, -v old="$rev" '
   function col(name) { return (file, name) in c ? $c[file, name] : 0 }
+  function has(f, name) { return (f, name) in c }
+  function shown(f, name, value) { return has(f, name) ? sprintf("%d", value) : "n/a" }
   FNR == 1 { file++; for (i = 1; i <= NF; ++i) c[file, $i] = i; next }
   {
     f = col("frame"); if (f == 0) next
@@ -88,6 +94,8 @@ awk -F, -v old="$rev" '
     printf "a heavy frame now against at %s: median ratio %.3f (%.3f to %.3f), total %.1f s against %.1f s (%.3f)\n", \
       old, median, ratio[1], ratio[n], new_total / 1000, old_total / 1000, new_total / old_total
     printf "heavy frames whose broad phase (now) costs more than their narrow phase: %d of %d\n", dearer, n
-    printf "at %s: penetrations %d, warnings %d, largest stretch %.4f; now: penetrations %d, warnings %d, largest stretch %.4f\n", \
-      old, pen[1], warn[1], stretch[1], pen[2], warn[2], stretch[2]
+    printf "at %s: penetrations %s, warnings %s, largest stretch %.4f; now: penetrations %s, warnings %s, largest stretch %.4f\n", \
+      old, shown(1, "penetrations", pen[1]), shown(1, "warnings", warn[1]), stretch[1], \
+      shown(2, "penetrations", pen[2]), shown(2, "warnings", warn[2]), stretch[2]
+    if (!has(1, "step_halvings")) printf "(%s has no step_halvings column: o_halv reads 0)\n", old
   }' "$OUT/old-1/stats.csv" "$OUT/new-1/stats.csv"
