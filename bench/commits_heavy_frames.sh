@@ -62,8 +62,8 @@ done
 # Columns a commit's stats.csv lacks (the earlier one may have no broad_ms, narrow_ms,
 # step_halvings or warnings) read as 0 in the sums and print as n/a in the summary.
 awk -F, -v old="$rev" '
-  function col(name) { return (file, name) in c ? $c[file, name] : 0 }
   function has(f, name) { return (f, name) in c }
+  function col(name) { return has(file, name) ? $c[file, name] : 0 }
   function shown(f, name, value) { return has(f, name) ? sprintf("%d", value) : "n/a" }
   FNR == 1 { file++; for (i = 1; i <= NF; ++i) c[file, $i] = i; next }
   {
