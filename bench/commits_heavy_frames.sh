@@ -58,38 +58,26 @@ for r in $(seq 1 "$REPEATS"); do
     if [ "$status" = 2 ]; then echo "commits_heavy_frames.sh: the $side run refused its input (status 2): no table" >&2; exit 1; fi
   done
 done
-# Per heavy frame, from the first repeat of each (every run's own time is printed above).
-# Columns a commit's stats.csv lacks (the earlier one may have no broad_ms, narrow_ms,
-# step_halvings or warnings) read as 0 in the sums and print as n/a in the summary.
-awk -F, -v old="$rev" '
-  function has(f, name) { return (f, name) in c }
-  function col(name) { return has(file, name) ? $c[file, name] : 0 }
+# Per heavy frame, from the first repeat of each (every run's own time is printed above);
+# bench/heavy_frames.awk reads the files. Columns a commit's stats.csv lacks (the earlier one
+# may have no broad_ms, narrow_ms, step_halvings or warnings) read as 0 in the sums and print
+# as n/a in the summary.
+awk -F, -v old="$rev" -f bench/heavy_frames.awk -f /dev/stdin "$OUT/old-1/stats.csv" "$OUT/new-1/stats.csv" <<'AWK'
   function shown(f, name, value) { return has(f, name) ? sprintf("%d", value) : "n/a" }
-  FNR == 1 { file++; for (i = 1; i <= NF; ++i) c[file, $i] = i; next }
-  {
-    f = col("frame"); if (f == 0) next
-    wall[file, f] = col("wall_ms"); solve[file, f] = col("solve_ms"); ccd[file, f] = col("ccd_ms")
-    broad[file, f] = col("broad_ms"); narrow[file, f] = col("narrow_ms"); halv[file, f] = col("step_halvings")
-    tests[file, f] = col("vf_tests") + col("ee_tests"); pen[file] += col("penetrations"); warn[file] += col("warnings")
-    if (col("max_stretch") > stretch[file]) stretch[file] = col("max_stretch")
-    if (f > last[file]) last[file] = f
-  }
   END {
-    most = 0
-    for (f = 1; f <= last[1]; ++f) if (tests[1, f] > most) most = tests[1, f]
+    most = most_tests(1)
     printf "\n%5s %10s %10s %10s %6s | %9s %9s %9s %9s %6s | %7s\n", "frame", "old_ms", "old_ccd", "old_solve", "o_halv", \
       "new_ms", "new_broad", "new_narr", "new_solve", "n_halv", "ratio"
     n = 0
     for (f = 1; f <= last[1]; ++f) {
-      if (most == 0 || !(tests[1, f] * 10 >= most) || !((2, f) in wall)) continue
+      if (!heavy(1, f, most) || !((2, f) in wall)) continue
       n++; ratio[n] = wall[2, f] / wall[1, f]; old_total += wall[1, f]; new_total += wall[2, f]
       if (broad[2, f] > narrow[2, f]) dearer++
       printf "%5d %10.1f %10.1f %10.1f %6d | %9.1f %9.1f %9.2f %9.1f %6d | %7.3f\n", f, wall[1, f], ccd[1, f], solve[1, f], halv[1, f], \
         wall[2, f], broad[2, f], narrow[2, f], solve[2, f], halv[2, f], ratio[n]
     }
     if (n == 0) { print "no heavy frame (no elementary tests in the earlier run, or the later run stopped before them)"; exit }
-    for (i = 1; i <= n; ++i) for (j = i + 1; j <= n; ++j) if (ratio[j] < ratio[i]) { t = ratio[i]; ratio[i] = ratio[j]; ratio[j] = t }
-    median = n % 2 ? ratio[(n + 1) / 2] : (ratio[n / 2] + ratio[n / 2 + 1]) / 2
+    median = sorted_median(ratio, n)
     printf "\n%d heavy frames (at least a tenth of the most tests, %d, of the run at %s)\n", n, most, old
     printf "a heavy frame now against at %s: median ratio %.3f (%.3f to %.3f), total %.1f s against %.1f s (%.3f)\n", \
       old, median, ratio[1], ratio[n], new_total / 1000, old_total / 1000, new_total / old_total
@@ -98,4 +86,5 @@ awk -F, -v old="$rev" '
       old, shown(1, "penetrations", pen[1]), shown(1, "warnings", warn[1]), stretch[1], \
       shown(2, "penetrations", pen[2]), shown(2, "warnings", warn[2]), stretch[2]
     if (!has(1, "step_halvings")) printf "(%s has no step_halvings column: o_halv reads 0)\n", old
-  }' "$OUT/old-1/stats.csv" "$OUT/new-1/stats.csv"
+  }
+AWK

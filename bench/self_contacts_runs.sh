@@ -40,40 +40,31 @@ for r in $(seq 1 "$REPEATS"); do
     echo "run $r, self contacts in the solve $mode: $(awk -v a="$start" -v b="$(date +%s%N)" 'BEGIN { printf "%.1f", (b - a) / 1e9 }') s"
   done
 done
-# Per heavy frame, from the first repeat of each (the later repeats' totals are printed below).
-awk -F, '
-  FNR == 1 { file++; for (i = 1; i <= NF; ++i) c[file, $i] = i; next }
-  {
-    f = $c[file, "frame"]; if (f == 0) next
-    wall[file, f] = $c[file, "wall_ms"]; broad[file, f] = $c[file, "broad_ms"]; narrow[file, f] = $c[file, "narrow_ms"]
-    halv[file, f] = $c[file, "step_halvings"]; prox[file, f] = $c[file, "proximity_impulses"]
-    tests[file, f] = $c[file, "vf_tests"] + $c[file, "ee_tests"]; pen[file] += $c[file, "penetrations"]; warn[file] += $c[file, "warnings"]
-    if ($c[file, "max_stretch"] > stretch[file]) stretch[file] = $c[file, "max_stretch"]
-    if (f > last) last = f
-  }
+# Per heavy frame, from the first repeat of each (the later repeats' totals are printed below);
+# bench/heavy_frames.awk reads the files.
+awk -F, -f bench/heavy_frames.awk -f /dev/stdin "$OUT/on-1/stats.csv" "$OUT/off-1/stats.csv" <<'AWK'
   END {
-    most = 0
-    for (f = 1; f <= last; ++f) if (tests[2, f] > most) most = tests[2, f]
+    most = most_tests(2); last_frame = last[1] > last[2] ? last[1] : last[2]
     printf "\n%5s %12s %12s %7s %10s %10s %10s %10s %6s %6s %7s %7s\n", "frame", "held_ms", "response_ms", "ratio", \
       "held_broad", "held_narr", "resp_broad", "resp_narr", "h_halv", "r_halv", "h_prox", "r_prox"
     n = 0
-    for (f = 1; f <= last; ++f) {
-      if (!(tests[2, f] * 10 >= most) || most == 0) continue
+    for (f = 1; f <= last_frame; ++f) {
+      if (!heavy(2, f, most)) continue
       n++; ratio[n] = wall[1, f] / wall[2, f]; on_total += wall[1, f]; off_total += wall[2, f]
       if (broad[1, f] > narrow[1, f]) dearer++
       printf "%5d %12.1f %12.1f %7.3f %10.1f %10.2f %10.1f %10.2f %6d %6d %7d %7d\n", f, wall[1, f], wall[2, f], ratio[n], \
         broad[1, f], narrow[1, f], broad[2, f], narrow[2, f], halv[1, f], halv[2, f], prox[1, f], prox[2, f]
     }
     if (n == 0) { print "no heavy frame (no elementary tests without the held contacts)"; exit }
-    for (i = 1; i <= n; ++i) for (j = i + 1; j <= n; ++j) if (ratio[j] < ratio[i]) { t = ratio[i]; ratio[i] = ratio[j]; ratio[j] = t }
-    median = n % 2 ? ratio[(n + 1) / 2] : (ratio[n / 2] + ratio[n / 2 + 1]) / 2
+    median = sorted_median(ratio, n)
     printf "\n%d heavy frames (at least a tenth of the most tests, %d, of the run without held contacts)\n", n, most
     printf "a heavy frame, held against the response alone: median ratio %.3f (%.3f to %.3f), total %.1f s against %.1f s (%.3f)\n", \
       median, ratio[1], ratio[n], on_total / 1000, off_total / 1000, on_total / off_total
     printf "heavy frames whose broad phase (held) costs more than their narrow phase: %d of %d\n", dearer, n
     printf "held: penetrations %d, warnings %d, largest stretch %.4f; the response alone: penetrations %d, warnings %d, largest stretch %.4f\n", \
       pen[1], warn[1], stretch[1], pen[2], warn[2], stretch[2]
-  }' "$OUT/on-1/stats.csv" "$OUT/off-1/stats.csv"
+  }
+AWK
 if [ "$REPEATS" -gt 1 ]; then
   for r in $(seq 1 "$REPEATS"); do
     for mode in on off; do
