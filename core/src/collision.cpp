@@ -203,8 +203,10 @@ void CollisionPipeline::set_observer(Observer observer) {
   impl_->observer = std::move(observer);
 }
 
-CollisionCounters CollisionPipeline::resolve(const std::vector<Vec3>& start, Scalar t, Scalar h, std::vector<Vec3>& motion) {
+CollisionCounters CollisionPipeline::resolve(const std::vector<Vec3>& start, Scalar t, Scalar h, std::vector<Vec3>& motion,
+                                             Scalar friction) {
   Impl& m = *impl_;
+  m.friction = friction;
   CollisionCounters counters;
   const auto begin = Clock::now();
   for (int v = 0; v < m.cloth_vertices; ++v) m.start[v] = start[v];

@@ -56,6 +56,7 @@ struct Zones {
 
 struct CollisionPipeline::Impl {
   const Model& model;
+  Scalar friction = 0;  // Coulomb's coefficient of the resolve being run (CollisionPipeline::resolve)
   CollisionSettings settings;
   int cloth_vertices = 0;
   std::vector<ccd::TriangleIndices> cloth_triangles;

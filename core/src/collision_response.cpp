@@ -38,7 +38,7 @@ int CollisionPipeline::Impl::impulses(ContactSet& set, Scalar h, std::vector<Vec
     const Vec3 relative = relative_velocity(c, h, motion);
     const Vec3 tangential = relative - relative.dot(c.normal) * c.normal;
     const Scalar slide = tangential.norm();
-    const Scalar rub = std::min(model.scene.friction * set.pushed[i] - set.rubbed[i], slide);
+    const Scalar rub = std::min(friction * set.pushed[i] - set.rubbed[i], slide);
     if (!(rub > 0)) continue;
     set.rubbed[i] += rub;
     apply(i, -rub * tangential / slide);
@@ -76,7 +76,7 @@ Contact CollisionPipeline::Impl::contact(bool vertex_face, const std::array<int,
 
 void CollisionPipeline::Impl::keep_out_of_analytic_obstacles(Scalar t_next, Scalar h, std::vector<Vec3>& motion) const {
   if (!model.scene.collisions.obstacles) return;
-  drape::keep_out_of_analytic_obstacles(model, start, t_next, h, ANALYTIC_KEEP_OUT * model.scene.collisions.thickness,
+  drape::keep_out_of_analytic_obstacles(model, start, t_next, h, ANALYTIC_KEEP_OUT * model.scene.collisions.thickness, 0,
                                         motion, nullptr);
 }
 

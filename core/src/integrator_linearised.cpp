@@ -144,7 +144,7 @@ bool Integrator::solve_linearised(State& state, const std::vector<Vec3>& pinned_
   // a vertex it holds are held with it (applied after the solve, it stopped a tablecloth's rim
   // vertices while the springs to the hanging side had been solved for them sliding: the
   // springs stretched).
-  const Scalar mu = m.scene.friction;
+  const Scalar mu = friction_;
   struct Friction {
     int vertex;
     Mat3 block;    // its term of the matrix

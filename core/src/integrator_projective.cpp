@@ -56,12 +56,12 @@ bool Integrator::solve_projective(State& state, const std::vector<Vec3>& pinned_
     contacts.margin = HELD_GAP * m.scene.collisions.thickness;
     for (const SolveContact& c : w.contacts)
       if (!c.analytic) contacts.mesh.push_back(c);
-    if (m.scene.friction > 0) {
+    if (friction_ > 0) {
       const std::vector<int> strongest = strongest_contacts(w.contacts, int(n));
       for (std::size_t v = 0; v < n; ++v)
         if (strongest[v] >= 0 && w.lagged.normal_force[v] > 0) {
           const SolveContact& c = w.contacts[std::size_t(strongest[v])];
-          contacts.friction.push_back({int(v), c.normal, c.surface_velocity, m.scene.friction * w.lagged.normal_force[v]});
+          contacts.friction.push_back({int(v), c.normal, c.surface_velocity, friction_ * w.lagged.normal_force[v]});
         }
     }
   }

@@ -105,8 +105,8 @@ void projection_friction(const SurfaceContact& c, Scalar mu, Scalar pushed, Vec3
 // impulse would (Bridson, Fedkiw and Anderson 2002, section 7.2); friction as a vertex's.
 // The side is the one the point was on at the step's start. Returns whether it moved.
 bool push_face_out(const Model& model, const PosedShape& at_start, const PosedShape& shape, Scalar t_next,
-                   const std::vector<Vec3>& start, Scalar h, Scalar depth, const Triangle& tri, std::vector<Vec3>& motion,
-                   std::vector<Vec3>* velocities) {
+                   const std::vector<Vec3>& start, Scalar h, Scalar depth, Scalar friction, const Triangle& tri,
+                   std::vector<Vec3>& motion, std::vector<Vec3>* velocities) {
   std::array<Vec3, 3> end;
   std::array<Scalar, 3> inverse_mass{};
   Scalar longest = 0;
@@ -156,7 +156,7 @@ bool push_face_out(const Model& model, const PosedShape& at_start, const PosedSh
   if (velocities) {
     for (int k = 0; k < 3; ++k) point_velocity += w[k] * (*velocities)[std::size_t(tri[k])];
     const Vec3 velocity_before = point_velocity;
-    projection_friction(c, model.scene.friction, push, point_motion, point_velocity);
+    projection_friction(c, friction, push, point_motion, point_velocity);
     velocity_change = point_velocity - velocity_before;
   }
   const Vec3 motion_change = point_motion - motion_before;
@@ -173,8 +173,8 @@ bool push_face_out(const Model& model, const PosedShape& at_start, const PosedSh
 }  // namespace
 
 int keep_out_of_analytic_obstacles(const Model& model, const std::vector<Vec3>& start, Scalar t_next, Scalar h,
-                                   Scalar depth, std::vector<Vec3>& motion, std::vector<Vec3>* velocities) {
-  const Scalar mu = model.scene.friction;
+                                   Scalar depth, Scalar friction, std::vector<Vec3>& motion, std::vector<Vec3>* velocities) {
+  const Scalar mu = friction;
   int contacts = 0;
   for (const Obstacle& obstacle : model.obstacles) {
     if (obstacle.spec.kind == ObstacleSpec::Kind::Mesh) continue;  // the collision pipeline's
@@ -196,8 +196,8 @@ int keep_out_of_analytic_obstacles(const Model& model, const std::vector<Vec3>& 
     for (int sweep = 0; sweep < FACE_SWEEPS; ++sweep) {
       bool moved = false;
       for (std::size_t f = 0; f < model.triangles.size(); ++f)
-        if (push_face_out(model, at_start, shape, t_next, start, h, FACE_DEPTH_FRACTION * depth, model.triangles[f], motion,
-                          velocities)) {
+        if (push_face_out(model, at_start, shape, t_next, start, h, FACE_DEPTH_FRACTION * depth, mu, model.triangles[f],
+                          motion, velocities)) {
           moved = true;
           contacts += !pushed[f];
           pushed[f] = 1;

@@ -55,4 +55,16 @@ bool Integrator::past_limit(const std::vector<Vec3>& positions, const std::vecto
   return false;
 }
 
+Scalar Integrator::limit_excess(const std::vector<Vec3>& start, const std::vector<Vec3>& end) const {
+  const Model& m = model_;
+  Scalar worst = 0;
+  for (int k : work_->limited_springs) {
+    const Spring& s = m.springs[std::size_t(k)];
+    const Scalar limit = s.limit * s.rest_length, before = (start[s.i] - start[s.j]).norm();
+    const Scalar allowed = before > limit ? before - STRAIN_RECOVERY * (before - limit) : limit;
+    worst = std::max(worst, (end[s.i] - end[s.j]).norm() / allowed - 1);
+  }
+  return worst;
+}
+
 }  // namespace drape

@@ -69,7 +69,7 @@ Vec3 angular_momentum(const Model& model, const std::vector<Vec3>& start, const 
 bool collision_free(const Model& model, const std::vector<Vec3>& start, Scalar h, const std::vector<Vec3>& motion) {
   CollisionPipeline again(model, CollisionSettings{});
   std::vector<Vec3> copy = motion;
-  const CollisionCounters c = again.resolve(start, 0, h, copy);
+  const CollisionCounters c = again.resolve(start, 0, h, copy, model.scene.friction);
   std::vector<Vec3> end(start.size());
   for (std::size_t v = 0; v < start.size(); ++v) end[v] = start[v] + h * motion[v];
   return c.ccd_hits == 0 && find_penetrations(model, end, h).empty();
@@ -87,7 +87,7 @@ TEST(Collision, ImpulsesKeepMomentumAndStopTheApproach) {
   std::vector<Vec3> motion = motions(model, Vec3(0.3, -0.1, -2.0));
   const std::vector<Vec3> before = motion;
   CollisionPipeline pipeline(model, CollisionSettings{});
-  const CollisionCounters c = pipeline.resolve(start, 0, h, motion);
+  const CollisionCounters c = pipeline.resolve(start, 0, h, motion, model.scene.friction);
   EXPECT_GT(c.ccd_hits, 0);
   EXPECT_EQ(c.impact_zones, 0);  // the impulses alone
   EXPECT_EQ(c.fail_safes, 0);
@@ -106,7 +106,7 @@ TEST(Collision, AnImpulseActsAlongItsNormalAndLeavesTheSeparationSpeed) {
   std::vector<Vec3> motion = motions(model, Vec3(0.1, 0.05, -2.0));
   const std::vector<Vec3> before = motion;
   CollisionPipeline pipeline(model, CollisionSettings{});
-  const CollisionCounters c = pipeline.resolve(model.initial_positions, 0, h, motion);
+  const CollisionCounters c = pipeline.resolve(model.initial_positions, 0, h, motion, model.scene.friction);
   EXPECT_GT(c.ccd_hits, 0);
   for (std::size_t v = 0; v < motion.size(); ++v) {
     if (model.pin_of_vertex[v] >= 0) {
@@ -135,7 +135,7 @@ TEST(Collision, FrictionStaysWithinCoulombsBoundAndNeverReversesTheSlip) {
     std::vector<Vec3> motion = motions(model, incoming);
     const std::vector<Vec3> before = motion;
     CollisionPipeline pipeline(model, CollisionSettings{});
-    pipeline.resolve(model.initial_positions, 0, h, motion);
+    pipeline.resolve(model.initial_positions, 0, h, motion, model.scene.friction);
     for (int v = model.cloths[1].first_vertex; v < int(motion.size()); ++v) {
       const Vec3 change = motion[std::size_t(v)] - before[std::size_t(v)];
       const Scalar normal = change.z(), tangential = Vec3(change.x(), change.y(), 0).norm();
@@ -166,7 +166,7 @@ TEST(Collision, ImpactZonesKeepMomentumAndAngularMomentum) {
     motion[v] = int(v) >= second ? Vec3(Vec3(0, 0, -2.0) + spin.cross(start[v] - centre)) : Vec3(0, 0, 0.5);
   const std::vector<Vec3> before = motion;
   CollisionPipeline pipeline(model, CollisionSettings{});
-  const CollisionCounters c = pipeline.resolve(start, 0, h, motion);
+  const CollisionCounters c = pipeline.resolve(start, 0, h, motion, model.scene.friction);
   EXPECT_GT(c.impact_zones, 0);
   EXPECT_EQ(c.fail_safes, 0);
   EXPECT_LT((momentum(model, motion) - momentum(model, before)).norm(), 1e-12);
@@ -181,7 +181,7 @@ TEST(Collision, TheFailSafeStopsWhatNothingElseResolved) {
   const Scalar h = model.scene.timestep();
   std::vector<Vec3> motion = motions(model, Vec3(0, 0, -2.0), Vec3(0, 0, 0.5));
   CollisionPipeline pipeline(model, CollisionSettings{});
-  const CollisionCounters c = pipeline.resolve(model.initial_positions, 0, h, motion);
+  const CollisionCounters c = pipeline.resolve(model.initial_positions, 0, h, motion, model.scene.friction);
   EXPECT_EQ(c.fail_safes, 1);
   EXPECT_TRUE(collision_free(model, model.initial_positions, h, motion));
 }
@@ -217,8 +217,9 @@ TEST(Collision, LaterRoundsTestingOnlyWhatMovedFindWhatWholeRoundsFind) {
     CollisionSettings whole;
     whole.incremental_rounds = false;
     std::vector<Vec3> incremental_motion = motion, whole_motion = motion;
-    const CollisionCounters a = CollisionPipeline(model, CollisionSettings{}).resolve(start, 0, h, incremental_motion);
-    const CollisionCounters b = CollisionPipeline(model, whole).resolve(start, 0, h, whole_motion);
+    const Scalar mu = model.scene.friction;
+    const CollisionCounters a = CollisionPipeline(model, CollisionSettings{}).resolve(start, 0, h, incremental_motion, mu);
+    const CollisionCounters b = CollisionPipeline(model, whole).resolve(start, 0, h, whole_motion, mu);
     EXPECT_GT(a.impulse_iterations + a.impact_zones, 1) << rounds;
     EXPECT_EQ(incremental_motion, whole_motion) << rounds;
     EXPECT_EQ(a.ccd_hits, b.ccd_hits) << rounds;
@@ -271,7 +272,7 @@ TEST(Collision, ImpulsesActAlongTiltedNormalsOfFacesAndEdges) {
     std::vector<Vec3> motion = turned(motions(model, Vec3(0.1, 0.05, -2.0)), degrees, axis);
     const std::vector<Vec3> before = motion;
     CollisionPipeline pipeline(model, CollisionSettings{});
-    const CollisionCounters c = pipeline.resolve(start, 0, h, motion);
+    const CollisionCounters c = pipeline.resolve(start, 0, h, motion, model.scene.friction);
     EXPECT_GT(c.ccd_hits, 0) << edges;
     EXPECT_EQ(c.impact_zones, 0) << edges;
     int changed = 0;
@@ -305,7 +306,7 @@ TEST(Collision, ProximityStopsAnApproachWithinTheThicknessAndNoMore) {
     std::vector<Vec3> motion = motions(flat, Vec3(0.02, 0, speed));
     const std::vector<Vec3> before = motion;
     CollisionPipeline pipeline(flat, CollisionSettings{});
-    const CollisionCounters c = pipeline.resolve(start, 0, h, motion);
+    const CollisionCounters c = pipeline.resolve(start, 0, h, motion, flat.scene.friction);
     EXPECT_EQ(c.ccd_hits, 0) << speed;
     if (speed < 0) {
       EXPECT_GT(c.proximity_impulses, 0) << speed;
@@ -333,7 +334,7 @@ TEST(Collision, AnImpactZoneTouchingAPinnedVertexMovesWithIt) {
   for (std::size_t v = 0; v < motion.size(); ++v)
     if (zones_only.pin_of_vertex[v] >= 0) motion[v] = carried;
   CollisionPipeline pipeline(zones_only, CollisionSettings{});
-  const CollisionCounters c = pipeline.resolve(zones_only.initial_positions, 0, h, motion);
+  const CollisionCounters c = pipeline.resolve(zones_only.initial_positions, 0, h, motion, zones_only.scene.friction);
   EXPECT_GT(c.impact_zones, 0);
   EXPECT_EQ(c.fail_safes, 0);
   int carried_along = 0;
@@ -360,7 +361,7 @@ TEST(Collision, TheFailSafeKeepsOnlyTheCollidingVerticesAtTheirStart) {
   std::vector<Vec3> motion = motions(model, Vec3(0, 0, -2.0), Vec3(0, 0, 0.1));
   const std::vector<Vec3> before = motion;
   CollisionPipeline pipeline(model, CollisionSettings{});
-  const CollisionCounters c = pipeline.resolve(model.initial_positions, 0, h, motion);
+  const CollisionCounters c = pipeline.resolve(model.initial_positions, 0, h, motion, model.scene.friction);
   EXPECT_EQ(c.fail_safes, 1);
   int stopped = 0, kept = 0;
   for (std::size_t v = 0; v < motion.size(); ++v) {

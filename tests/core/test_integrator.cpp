@@ -332,9 +332,15 @@ TEST(Integrator, StrainLimitingHoldsAStruckCurtainWithinTheLimitEveryStep) {
 // collision pipeline's) that goes on 1.5 m past it: the cloth wraps the ball and must slide off
 // it. Held for the step, the pulls of its contacts behind the ball moved them with the ball and
 // the cloth was dragged on: it stretched to 1.55 times its rest length at 6 m/s and 1.71 at
-// 8 m/s (with friction the ball still holds it: docs/collisions.md).
+// 8 m/s. With friction (0.3 is the default) the rounds of limit and response could not undo a
+// step's travel of the ball over the cloth and the excess grew step by step: 1.61 at 0.3 and
+// 2.21 at 0.6, where the run stopped; the step is now taken again in parts while it ends past
+// the limit (STRAIN_RETAKE, docs/collisions.md).
 TEST(Integrator, StrainLimitingHoldsACurtainStruckByAMovingMeshBall) {
-  for (const double speed : {6.0, 8.0}) {
+  struct Case {
+    double speed, friction;
+  };
+  for (const auto& [speed, friction] : {Case{6, 0}, Case{8, 0}, Case{6, 0.3}, Case{6, 0.6}}) {
     const std::string json = R"({"frame_time": 0.033333333333333333, "frame_steps": 8, "frames": 20,
       "cloths": [{"grid": {"size": [1, 1], "resolution": [24, 24]}, "transform": {"translate": [0, 0, 1.2], "rotate": [90, 1, 0, 0]},
                   "material": {"preset": "royal-target", "strain_limit": 1.1}}],
@@ -343,11 +349,11 @@ TEST(Integrator, StrainLimitingHoldsACurtainStruckByAMovingMeshBall) {
                              R"(/scenes/meshes/icosphere.obj", "transform": {"translate": [0, -0.3, 1.1], "scale": 0.15},
                      "motion": {"velocity": [0, )" + std::to_string(speed) + R"(, 0], "end": )" + std::to_string(1.8 / speed) +
                              R"(}}],
-      "friction": 0, "collisions": {"self": true, "thickness": 0.004}})";
+      "friction": )" + std::to_string(friction) + R"(, "collisions": {"self": true, "thickness": 0.004}})";
     const auto [failure, largest, over_limit, shear_over_limit] = run_limited(model_of(json));
     ASSERT_TRUE(failure.empty()) << failure;
-    EXPECT_LE(over_limit, 1.01) << speed << " m/s";
-    EXPECT_GT(largest, 1.09) << speed << " m/s";  // struck hard enough to reach the limit
+    EXPECT_LE(over_limit, 1.01) << speed << " m/s, friction " << friction;
+    EXPECT_GT(largest, 1.09) << speed << " m/s, friction " << friction;  // struck hard enough to reach the limit
   }
 }
 

@@ -107,8 +107,9 @@ class CollisionPipeline {
   ~CollisionPipeline();
   /// start: positions at time t (intersection-free). motion: proposed velocities, changed in
   /// place so that start + h motion is free of collisions. Kinematic vertices (pinned cloth
-  /// vertices, obstacles) are never changed.
-  CollisionCounters resolve(const std::vector<Vec3>& start, Scalar t, Scalar h, std::vector<Vec3>& motion);
+  /// vertices, obstacles) are never changed. friction: Coulomb's coefficient of the impulses
+  /// (the scene's, or 0 for a step taken again sliding).
+  CollisionCounters resolve(const std::vector<Vec3>& start, Scalar t, Scalar h, std::vector<Vec3>& motion, Scalar friction);
 
   /// The contacts of the free cloth with the mesh obstacles at the step's start, within reach:
   /// a cloth vertex and an obstacle's triangle, a cloth edge and an obstacle's edge (each

@@ -137,6 +137,10 @@ class Integrator {
   // Whether a limited spring (structural, or a diagonal under a shear locking angle) ends the
   // step (positions + h motion) past its limit by more than STRAIN_SLACK.
   bool past_limit(const std::vector<Vec3>& positions, const std::vector<Vec3>& motion) const;
+  // The largest length of a limited spring at the end of a step over what the limit allows it
+  // from the step's start (its limit, or STRAIN_RECOVERY of its excess less when it started
+  // past it), less 1 (0 with none limited or none past).
+  Scalar limit_excess(const std::vector<Vec3>& start, const std::vector<Vec3>& end) const;
   // The linearised system assembled at the state (forces into the workspace) and solved:
   // the state's velocities advanced; false (report says why) when the solve failed.
   bool solve_linearised(State& state, const std::vector<Vec3>& pinned_dv, StepReport& report);
@@ -170,6 +174,9 @@ class Integrator {
   std::unique_ptr<Workspace> work_;
   Scalar h_ = 0;                 // the step being taken: the scene's timestep or a part of it
   Scalar energy_tolerance_ = 0;  // J, see STEP_ENERGY_TOLERANCE
+  // Coulomb's coefficient of the attempt being taken: the scene's, or 0 where a step is taken
+  // again sliding (step: friction would hold the cloth past its strain limit).
+  Scalar friction_ = 0;
   // The potential energy of the last step's end and the positions it was taken at: the next
   // step's start, when nothing moved the cloth in between.
   Scalar ended_potential_ = 0;

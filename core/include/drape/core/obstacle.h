@@ -62,9 +62,10 @@ constexpr Scalar FACE_DEPTH_FRACTION = 0.5;
 /// triangle out to that depth, the corners sharing the change by weight and inverse mass. With velocities (the response after the solve, at the thickness), the
 /// motion also feels Coulomb friction from that push, and the velocity loses its approaching
 /// normal part and feels Coulomb friction relative to the surface; without (the collision
-/// pipeline between its rounds), only the motion changes. Returns how many vertices moved.
+/// pipeline between its rounds), only the motion changes. friction: Coulomb's coefficient (the
+/// scene's, or 0 for a step taken again sliding). Returns how many vertices moved.
 int keep_out_of_analytic_obstacles(const Model& model, const std::vector<Vec3>& start, Scalar t_next, Scalar h,
-                                   Scalar depth, std::vector<Vec3>& motion, std::vector<Vec3>* velocities);
+                                   Scalar depth, Scalar friction, std::vector<Vec3>& motion, std::vector<Vec3>* velocities);
 
 /// The velocity at time t of the obstacle's body point now at x (translation plus rotation).
 Vec3 body_velocity(const Motion& motion, const Vec3& x_now, Scalar t);
