@@ -59,8 +59,9 @@ inline constexpr int STRAIN_LIMIT_SWEEPS = 200;
 // motion through the limit and the response again, at most STRAIN_RESPONSE_ROUNDS times.
 inline constexpr Scalar STRAIN_SLACK = 0.002;
 inline constexpr int STRAIN_RESPONSE_ROUNDS = 16;
-// A step that still ends with a limited spring past (1 + STRAIN_RETAKE) times its limit (the
-// rounds ran out) is taken again in parts (Integrator::step), as one that makes energy is.
+// A step that still ends with a limited spring past (1 + STRAIN_RETAKE) times what its limit
+// allows it (Integrator::limit_excess; the rounds ran out) is taken again in parts, and then
+// without friction (Integrator::step).
 inline constexpr Scalar STRAIN_RETAKE = 0.005;
 
 // A contact, the same from step to step: its cloth vertices and its kind (the cloth with

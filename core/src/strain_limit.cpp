@@ -60,6 +60,7 @@ Scalar Integrator::limit_excess(const std::vector<Vec3>& start, const std::vecto
   Scalar worst = 0;
   for (int k : work_->limited_springs) {
     const Spring& s = m.springs[std::size_t(k)];
+    if (work_->free_index[s.i] < 0 && work_->free_index[s.j] < 0) continue;  // both ends pinned: their handles decide
     const Scalar limit = s.limit * s.rest_length, before = (start[s.i] - start[s.j]).norm();
     const Scalar allowed = before > limit ? before - STRAIN_RECOVERY * (before - limit) : limit;
     worst = std::max(worst, (end[s.i] - end[s.j]).norm() / allowed - 1);

@@ -139,7 +139,8 @@ class Integrator {
   bool past_limit(const std::vector<Vec3>& positions, const std::vector<Vec3>& motion) const;
   // The largest length of a limited spring at the end of a step over what the limit allows it
   // from the step's start (its limit, or STRAIN_RECOVERY of its excess less when it started
-  // past it), less 1 (0 with none limited or none past).
+  // past it), less 1 (0 with none limited or none past); springs pinned at both ends are their
+  // handles' (as in limit_strain).
   Scalar limit_excess(const std::vector<Vec3>& start, const std::vector<Vec3>& end) const;
   // The linearised system assembled at the state (forces into the workspace) and solved:
   // the state's velocities advanced; false (report says why) when the solve failed.
@@ -174,6 +175,7 @@ class Integrator {
   std::unique_ptr<Workspace> work_;
   Scalar h_ = 0;                 // the step being taken: the scene's timestep or a part of it
   Scalar energy_tolerance_ = 0;  // J, see STEP_ENERGY_TOLERANCE
+  Scalar energy_warning_ = 0;    // J: an excess that would make the run warn (limits.energy_warn)
   // Coulomb's coefficient of the attempt being taken: the scene's, or 0 where a step is taken
   // again sliding (step: friction would hold the cloth past its strain limit).
   Scalar friction_ = 0;
