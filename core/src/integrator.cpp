@@ -32,8 +32,9 @@ Integrator::Integrator(const Model& model, int threads)
   w.lagged.normal_force.assign(std::size_t(n), 0);
   for (int v = 0; v < n; ++v)
     if (model.pin_of_vertex[v] < 0) w.free_index[v] = w.free_count++;
-  energy_tolerance_ = STEP_ENERGY_TOLERANCE * energy_scale(model);
-  energy_warning_ = model.scene.limits.energy_warn * energy_scale(model);
+  const Scalar scale = energy_scale(model);
+  energy_tolerance_ = STEP_ENERGY_TOLERANCE * scale;
+  energy_warning_ = model.scene.limits.energy_warn * scale;
   for (std::size_t k = 0; k < model.springs.size(); ++k)
     if (model.springs[k].limit > 0) w.limited_springs.push_back(int(k));
   if (model.scene.solver.kind == SolverKind::Projective) {  // a scene pays only for what it asks for

@@ -174,7 +174,6 @@ bool push_face_out(const Model& model, const PosedShape& at_start, const PosedSh
 
 int keep_out_of_analytic_obstacles(const Model& model, const std::vector<Vec3>& start, Scalar t_next, Scalar h,
                                    Scalar depth, Scalar friction, std::vector<Vec3>& motion, std::vector<Vec3>* velocities) {
-  const Scalar mu = friction;
   int contacts = 0;
   for (const Obstacle& obstacle : model.obstacles) {
     if (obstacle.spec.kind == ObstacleSpec::Kind::Mesh) continue;  // the collision pipeline's
@@ -186,7 +185,7 @@ int keep_out_of_analytic_obstacles(const Model& model, const std::vector<Vec3>& 
       if (!contact) continue;
       ++contacts;
       if (!velocities) continue;
-      projection_friction(*contact, mu, (motion[v] - before).dot(contact->normal), motion[v], (*velocities)[v]);
+      projection_friction(*contact, friction, (motion[v] - before).dot(contact->normal), motion[v], (*velocities)[v]);
     }
     // A sphere can pass between the corners of a triangle; a plane cannot (a triangle's
     // deepest point below it is a corner). Sweeps, since neighbouring faces share corners.
@@ -196,7 +195,7 @@ int keep_out_of_analytic_obstacles(const Model& model, const std::vector<Vec3>& 
     for (int sweep = 0; sweep < FACE_SWEEPS; ++sweep) {
       bool moved = false;
       for (std::size_t f = 0; f < model.triangles.size(); ++f)
-        if (push_face_out(model, at_start, shape, t_next, start, h, FACE_DEPTH_FRACTION * depth, mu, model.triangles[f],
+        if (push_face_out(model, at_start, shape, t_next, start, h, FACE_DEPTH_FRACTION * depth, friction, model.triangles[f],
                           motion, velocities)) {
           moved = true;
           contacts += !pushed[f];

@@ -7,6 +7,17 @@
 
 namespace drape {
 
+namespace {
+
+// The longest a limited spring may end a step whose start found it `start` long: its limit, or
+// STRAIN_RECOVERY of its excess shorter when it started past it (the response may leave one).
+Scalar longest_allowed(const Spring& s, Scalar start) {
+  const Scalar limit = s.limit * s.rest_length;
+  return start > limit ? start - STRAIN_RECOVERY * (start - limit) : limit;
+}
+
+}  // namespace
+
 Scalar Integrator::limit_strain(const std::vector<Vec3>& positions, std::vector<Vec3>& motion, std::vector<Vec3>* also,
                                 StepReport& report) {
   const Model& m = model_;
@@ -22,8 +33,7 @@ Scalar Integrator::limit_strain(const std::vector<Vec3>& positions, std::vector<
       const Vec3 d = positions[s.i] + h * motion[s.i] - positions[s.j] - h * motion[s.j];
       // A spring the response left past its limit is pulled back by STRAIN_RECOVERY of its
       // excess: not all at once (its excess over h as a speed), nor none (a ratchet).
-      const Scalar limit = s.limit * s.rest_length, start = (positions[s.i] - positions[s.j]).norm();
-      const Scalar length = d.norm(), longest = start > limit ? start - STRAIN_RECOVERY * (start - limit) : limit;
+      const Scalar length = d.norm(), longest = longest_allowed(s, (positions[s.i] - positions[s.j]).norm());
       if (!(length > longest)) continue;
       const Scalar wi = inverse_mass(s.i), wj = inverse_mass(s.j);
       if (!(wi + wj > 0)) continue;  // both ends pinned: their handles decide
@@ -61,9 +71,7 @@ Scalar Integrator::limit_excess(const std::vector<Vec3>& start, const std::vecto
   for (int k : work_->limited_springs) {
     const Spring& s = m.springs[std::size_t(k)];
     if (work_->free_index[s.i] < 0 && work_->free_index[s.j] < 0) continue;  // both ends pinned: their handles decide
-    const Scalar limit = s.limit * s.rest_length, before = (start[s.i] - start[s.j]).norm();
-    const Scalar allowed = before > limit ? before - STRAIN_RECOVERY * (before - limit) : limit;
-    worst = std::max(worst, (end[s.i] - end[s.j]).norm() / allowed - 1);
+    worst = std::max(worst, (end[s.i] - end[s.j]).norm() / longest_allowed(s, (start[s.i] - start[s.j]).norm()) - 1);
   }
   return worst;
 }
