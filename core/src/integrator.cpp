@@ -4,6 +4,7 @@
 #include <chrono>
 #include <iterator>
 #include <optional>
+#include <tuple>
 
 #include "drape/ccd/distance.h"
 #include "drape/core/obstacle.h"
@@ -433,7 +434,11 @@ StepReport Integrator::step(State& state) {
     const Scalar excess = kinetic_energy(m, s) + potential - energy_before - report.external_work;
     return std::make_pair(report, excess);
   };
-  auto [report, excess] = take(state, 1);
+  // Named variables, not a structured binding: the lambdas below capture them, which C++17
+  // (and clang 14, the fuzzers' compiler) does not allow of a binding.
+  StepReport report;
+  Scalar excess = 0;
+  std::tie(report, excess) = take(state, 1);
   Scalar stretched = limit_excess(before.positions, state.positions);
   kept_lagged = work_->lagged;
   const auto too_much_energy = [&](Scalar e) { return e > energy_tolerance_; };
