@@ -61,8 +61,9 @@ class BoxTree {
   BoxTree(BoxTree&&) noexcept;
   BoxTree& operator=(BoxTree&&) noexcept;
 
-  /// Sets the boxes. The first call (or a change of count) builds the tree; later calls move
-  /// each leaf to its new box and let Bullet refit and rebalance incrementally.
+  /// Sets the boxes. The first call (or a change of count) builds the tree; later calls give
+  /// each leaf its new box, refit the inner nodes (the tree's shape kept) and let Bullet
+  /// rebalance one leaf.
   void update(std::span<const Aabb> boxes);
   std::size_t size() const;
   /// Overlapping leaves (i < j) of this tree against itself, sorted.
