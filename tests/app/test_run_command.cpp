@@ -88,6 +88,25 @@ TEST(RunCommand, ValidateAcceptsAndRejects) {
   EXPECT_EQ(run_drape("run " + SOURCE + "/scenes/flag.json --frames 0").status, 2);
 }
 
+TEST(RunCommand, EveryUserSceneInBenchValidatesAndRuns) {
+  // bench/user_scenes/ (the scenes of the kind users bring, run in full by a benchmark) must
+  // not rot as the scene format changes: each validates, runs two frames under --check and
+  // passes drape check.
+  std::size_t scenes = 0;
+  for (const auto& entry : fs::directory_iterator(SOURCE + "/bench/user_scenes")) {
+    if (entry.path().extension() != ".json") continue;
+    const Outcome valid = run_drape("validate " + entry.path().string());
+    EXPECT_EQ(valid.status, 0) << valid.output;
+    const fs::path out = temp_dir("user_" + entry.path().stem().string());
+    const Outcome run = run_drape("run " + entry.path().string() + " --frames 2 --check --quiet --out " + out.string());
+    EXPECT_EQ(run.status, 0) << entry.path() << ": " << run.output;
+    const Outcome check = run_drape("check " + out.string());
+    EXPECT_EQ(check.status, 0) << entry.path() << ": " << check.output;
+    ++scenes;
+  }
+  EXPECT_GE(scenes, 5u);
+}
+
 TEST(RunCommand, ValidateWarnsWhenTheThicknessIsLargeAgainstTheEdges) {
   // The Cusick disc: edges of about 6 mm against the default 5 mm thickness, self-collision on.
   const Outcome fine = run_drape("validate " + SOURCE + "/scenes/cusick_drape.json");

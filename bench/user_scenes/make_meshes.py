@@ -1,0 +1,75 @@
+#!/usr/bin/env python3
+"""Writes the meshes of the scenes in this folder, scenes of the kind users bring rather than
+the shipped ones (bench/user_scenes/README.md). Run once; the files are committed.
+hips.obj: a closed body of revolution about z, radius 0.15 m widening to 0.25 m at the hips
+(z = 0.85 m), 1.3 m tall (40 segments around, 40 rows). skirt.obj: an open cone of cloth,
+radius 0.21 m at z = 1.15 m to 0.40 m at z = 0.55 m (72 around, 30 rows, alternate rows
+offset half a segment). paddle.obj: a closed box 0.8 x 0.05 x 0.3 m centred on the origin."""
+import math, os
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+
+
+def write(name, vertices, faces, comment):
+    with open(os.path.join(HERE, name), "w") as f:
+        f.write(f"# {comment}\n")
+        for v in vertices:
+            f.write("v %.9f %.9f %.9f\n" % v)
+        for a, b, c in faces:
+            f.write(f"f {a + 1} {b + 1} {c + 1}\n")
+
+
+def hips():
+    around, rows, bottom, top = 40, 40, 0.0, 1.3
+    radius = lambda z: 0.15 + 0.1 * math.exp(-(((z - 0.85) / 0.12) ** 2))
+    v, f = [], []
+    for j in range(rows + 1):
+        z = bottom + (top - bottom) * j / rows
+        for i in range(around):
+            a = 2 * math.pi * i / around
+            v.append((radius(z) * math.cos(a), radius(z) * math.sin(a), z))
+    for j in range(rows):
+        for i in range(around):
+            a, b = j * around + i, j * around + (i + 1) % around
+            f += [(a, b, b + around), (a, b + around, a + around)]  # outward, counter-clockwise seen from outside
+    low, high = len(v), len(v) + 1
+    v += [(0, 0, bottom), (0, 0, top)]
+    for i in range(around):
+        f += [(low, (i + 1) % around, i), (high, rows * around + i, rows * around + (i + 1) % around)]
+    return v, f
+
+
+def skirt():
+    around, rows, r_top, r_bottom, z_top, z_bottom = 72, 30, 0.21, 0.40, 1.15, 0.55
+    v, f = [], []
+    for j in range(rows + 1):
+        s = j / rows
+        r, z = r_top + (r_bottom - r_top) * s, z_top + (z_bottom - z_top) * s
+        for i in range(around):
+            a = 2 * math.pi * (i + 0.5 * (j % 2)) / around
+            v.append((r * math.cos(a), r * math.sin(a), z))
+    for j in range(rows):
+        for i in range(around):
+            a, b = j * around + i, j * around + (i + 1) % around
+            c, d = a + around, b + around
+            f += [(a, b, c), (b, d, c)] if j % 2 == 0 else [(a, b, d), (a, d, c)]
+    return v, f
+
+
+def paddle(sx, sy, sz):
+    v = [(x * sx / 2, y * sy / 2, z * sz / 2) for x in (-1, 1) for y in (-1, 1) for z in (-1, 1)]
+    corner = lambda x, y, z: 4 * x + 2 * y + z
+    quads = [((0, 0, 0), (0, 0, 1), (0, 1, 1), (0, 1, 0)), ((1, 0, 0), (1, 1, 0), (1, 1, 1), (1, 0, 1)),
+             ((0, 0, 0), (1, 0, 0), (1, 0, 1), (0, 0, 1)), ((0, 1, 0), (0, 1, 1), (1, 1, 1), (1, 1, 0)),
+             ((0, 0, 0), (0, 1, 0), (1, 1, 0), (1, 0, 0)), ((0, 0, 1), (1, 0, 1), (1, 1, 1), (0, 1, 1))]
+    f = []
+    for q in quads:
+        a, b, c, d = (corner(*p) for p in q)
+        f += [(a, b, c), (a, c, d)]
+    return v, f
+
+
+if __name__ == "__main__":
+    write("hips.obj", *hips(), "a body of revolution widening at the hips (bench/user_scenes/make_meshes.py)")
+    write("skirt.obj", *skirt(), "an open cone of cloth, a skirt (bench/user_scenes/make_meshes.py)")
+    write("paddle.obj", *paddle(0.8, 0.05, 0.3), "a closed box 0.8 x 0.05 x 0.3 m (bench/user_scenes/make_meshes.py)")
