@@ -38,6 +38,11 @@ Integrator::Integrator(const Model& model, int threads)
   energy_warning_ = model.scene.limits.energy_warn * scale;
   for (std::size_t k = 0; k < model.springs.size(); ++k)
     if (model.springs[k].limit > 0) w.limited_springs.push_back(int(k));
+  if (!w.limited_springs.empty()) {  // strain limiting's inverse masses, 0 at pinned vertices
+    w.inverse_mass.assign(std::size_t(n), 0);
+    for (int v = 0; v < n; ++v)
+      if (w.free_index[v] >= 0) w.inverse_mass[std::size_t(v)] = 1 / model.masses[std::size_t(v)];
+  }
   if (model.scene.solver.kind == SolverKind::Projective) {  // a scene pays only for what it asks for
     projective_ = std::make_unique<ProjectiveSolver>(model, w.free_index, w.free_count, threads);
     return;

@@ -13,6 +13,7 @@
 
 #include "drape/core/integrator.h"
 #include "projective.h"
+#include "strain_limit.h"
 
 namespace drape {
 
@@ -79,6 +80,8 @@ struct Integrator::Workspace {
   std::vector<int> free_index;               // vertex -> free vertex index, or -1 if pinned
   int free_count = 0;
   std::vector<int> limited_springs;          // the springs with a strain limit (Spring::limit), in order
+  std::vector<Scalar> inverse_mass;          // 1 / mass of each free vertex, 0 of a pinned one
+  StrainSweepRecord strain_sweeps;           // limit_strain's record, its memory reused
   SparseMatrix matrix;
   std::vector<std::array<int, 3>> diagonal;  // free vertex -> offsets of its (a, a) block
   struct SpringBlocks {

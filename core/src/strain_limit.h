@@ -1,0 +1,40 @@
+// Strain limiting's sweeps, apart from the integrator so that tests can hold them against a
+// plain Gauss-Seidel sweep: docs/materials.md.
+#pragma once
+
+#include <span>
+#include <vector>
+
+#include "drape/core/model.h"
+
+namespace drape {
+
+/// What the sweeps did: corrections made, and the work pinned ends did through the springs.
+struct StrainSweeps {
+  long corrections = 0;
+  Scalar work = 0;
+};
+
+/// When each vertex's motion last changed and each limited spring was last looked at, kept
+/// between calls so that its memory is reused.
+struct StrainSweepRecord {
+  std::vector<long> changed, checked;
+};
+
+/// The longest a limited spring may end a step whose start found it `start` long: its limit,
+/// or STRAIN_RECOVERY of its excess shorter when it started past it.
+Scalar longest_allowed(const Spring& s, Scalar start);
+
+/// Gauss-Seidel sweeps over the springs `limited` (indices into `springs`, in that order), at
+/// most `max_sweeps`, until one corrects nothing: a spring whose length at the step's end
+/// (positions + h motion) passes longest_allowed gets equal and opposite changes of its ends'
+/// motion along it by inverse mass (inverse_mass[v] 0 for a pinned vertex), which end it
+/// there; `also`, when given, gets the same changes. A spring none of whose ends moved since
+/// it was last looked at is passed over (its length is the one found then): the corrections
+/// and their order are those of looking at every spring in every sweep.
+StrainSweeps limit_strain_sweeps(std::span<const Spring> springs, std::span<const int> limited,
+                                 std::span<const Vec3> positions, std::span<const Scalar> inverse_mass, Scalar h,
+                                 int max_sweeps, std::vector<Vec3>& motion, std::vector<Vec3>* also,
+                                 StrainSweepRecord& record);
+
+}  // namespace drape
