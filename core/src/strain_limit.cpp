@@ -13,10 +13,9 @@ Scalar longest_allowed(const Spring& s, Scalar start) {
   return start > limit ? start - STRAIN_RECOVERY * (start - limit) : limit;
 }
 
-StrainSweeps limit_strain_sweeps(std::span<const Spring> springs, std::span<const int> limited,
-                                 std::span<const Vec3> positions, std::span<const Scalar> inverse_mass, Scalar h,
-                                 int max_sweeps, std::vector<Vec3>& motion, std::vector<Vec3>* also,
+StrainSweeps limit_strain_sweeps(const StrainSweepInput& in, std::vector<Vec3>& motion, std::vector<Vec3>* also,
                                  StrainSweepRecord& record) {
+  const auto& [springs, limited, positions, inverse_mass, h, max_sweeps] = in;
   // A spring is looked at again only once an end of it has moved since it was last looked at:
   // a curtain caught on a moving paddle ran its 200 sweeps over all 14,520 springs in every
   // call for the few dozen along its taut chains, 5.5 s of a 13.9 s frame.
@@ -59,8 +58,8 @@ Scalar Integrator::limit_strain(const std::vector<Vec3>& positions, std::vector<
                                 StepReport& report) {
   Workspace& w = *work_;
   const auto begin = std::chrono::steady_clock::now();
-  const StrainSweeps done = limit_strain_sweeps(model_.springs, w.limited_springs, positions, w.inverse_mass, h_,
-                                                STRAIN_LIMIT_SWEEPS, motion, also, w.strain_sweeps);
+  const StrainSweeps done = limit_strain_sweeps({model_.springs, w.limited_springs, positions, w.inverse_mass, h_, STRAIN_LIMIT_SWEEPS},
+                                                motion, also, w.strain_sweeps);
   report.strain_limited += done.corrections;
   report.strain_ms += std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - begin).count();
   return done.work;

@@ -25,16 +25,23 @@ struct StrainSweepRecord {
 /// or STRAIN_RECOVERY of its excess shorter when it started past it.
 Scalar longest_allowed(const Spring& s, Scalar start);
 
-/// Gauss-Seidel sweeps over the springs `limited` (indices into `springs`, in that order), at
-/// most `max_sweeps`, until one corrects nothing: a spring whose length at the step's end
-/// (positions + h motion) passes longest_allowed gets equal and opposite changes of its ends'
-/// motion along it by inverse mass (inverse_mass[v] 0 for a pinned vertex), which end it
-/// there; `also`, when given, gets the same changes. A spring none of whose ends moved since
-/// it was last looked at is passed over (its length is the one found then): the corrections
-/// and their order are those of looking at every spring in every sweep.
-StrainSweeps limit_strain_sweeps(std::span<const Spring> springs, std::span<const int> limited,
-                                 std::span<const Vec3> positions, std::span<const Scalar> inverse_mass, Scalar h,
-                                 int max_sweeps, std::vector<Vec3>& motion, std::vector<Vec3>* also,
+/// What the sweeps read.
+struct StrainSweepInput {
+  std::span<const Spring> springs;
+  std::span<const int> limited;          ///< indices into springs, swept in this order
+  std::span<const Vec3> positions;       ///< at the step's start
+  std::span<const Scalar> inverse_mass;  ///< per vertex, 0 at a pinned one
+  Scalar h = 0;                          ///< the step, s
+  int max_sweeps = 0;
+};
+
+/// Gauss-Seidel sweeps over the limited springs, at most max_sweeps, until one corrects
+/// nothing: a spring whose length at the step's end (positions + h motion) passes
+/// longest_allowed gets equal and opposite changes of its ends' motion along it by inverse
+/// mass, which end it there; `also`, when given, gets the same changes. A spring none of whose
+/// ends moved since it was last looked at is passed over (its length is the one found then):
+/// the corrections and their order are those of looking at every spring in every sweep.
+StrainSweeps limit_strain_sweeps(const StrainSweepInput& in, std::vector<Vec3>& motion, std::vector<Vec3>* also,
                                  StrainSweepRecord& record);
 
 }  // namespace drape

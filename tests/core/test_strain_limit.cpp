@@ -79,7 +79,7 @@ TEST(StrainLimit, SweepsThatPassOverUnmovedSpringsCorrectAsEverySpringLookedAtDo
   for (int max_sweeps : {1, 3, 200}) {
     std::vector<Vec3> motion = start_motion, also(positions.size(), Vec3::Zero());
     std::vector<Vec3> plain_motion = start_motion, plain_also = also;
-    const StrainSweeps fast = limit_strain_sweeps(springs, limited, positions, inverse_mass, h, max_sweeps, motion, &also, record);
+    const StrainSweeps fast = limit_strain_sweeps({springs, limited, positions, inverse_mass, h, max_sweeps}, motion, &also, record);
     const StrainSweeps plain = plain_sweeps(springs, limited, positions, inverse_mass, h, max_sweeps, plain_motion, plain_also);
     EXPECT_GT(plain.corrections, long(limited.size()) / 10) << max_sweeps;  // the sweeps had work to do
     EXPECT_EQ(fast.corrections, plain.corrections) << max_sweeps;
