@@ -140,14 +140,15 @@ def table():
     legs = [((x * 0.55, y * 0.35, 0.355), (0.05, 0.05, 0.71)) for x in (-1, 1) for y in (-1, 1)]
     return boxes([top] + legs, 4)
 
-here = os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "scenes", "meshes")
-os.makedirs(here, exist_ok=True)
-write(os.path.join(here, "icosphere.obj"), *icosphere(3), "unit icosphere, 3 subdivisions (tools/make_meshes.py)")
-write(os.path.join(here, "box.obj"), *box(4), "unit cube, 4x4 quads a face (tools/make_meshes.py)")
-write(os.path.join(here, "disc_30cm.obj"), *disc(0.15, 25), "30 cm disc, 25 rings 6 mm apart (tools/make_meshes.py)")
-write(os.path.join(here, "disc_30cm_12mm.obj"), *disc(0.15, 12), "30 cm disc, 12 rings 12.5 mm apart (tools/make_meshes.py)")
-write(os.path.join(here, "disc_30cm_3mm.obj"), *disc(0.15, 50), "30 cm disc, 50 rings 3 mm apart (tools/make_meshes.py)")
-write(os.path.join(here, "cusick_support.obj"), *cylinder(0.09, 0.3, 64, 4),
-      "18 cm support: cylinder r 0.09 m, h 0.3 m on z = 0 (tools/make_meshes.py)")
-write(os.path.join(here, "table.obj"), *table(),
-      "table: top 1.2 x 0.8 x 0.04 m at 0.75 m, four 0.05 m legs, separate boxes (tools/make_meshes.py)")
+if __name__ == "__main__":  # bench/user_scenes/make_meshes.py imports write
+    here = os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "scenes", "meshes")
+    os.makedirs(here, exist_ok=True)
+    write(os.path.join(here, "icosphere.obj"), *icosphere(3), "unit icosphere, 3 subdivisions (tools/make_meshes.py)")
+    write(os.path.join(here, "box.obj"), *box(4), "unit cube, 4x4 quads a face (tools/make_meshes.py)")
+    write(os.path.join(here, "disc_30cm.obj"), *disc(0.15, 25), "30 cm disc, 25 rings 6 mm apart (tools/make_meshes.py)")
+    write(os.path.join(here, "disc_30cm_12mm.obj"), *disc(0.15, 12), "30 cm disc, 12 rings 12.5 mm apart (tools/make_meshes.py)")
+    write(os.path.join(here, "disc_30cm_3mm.obj"), *disc(0.15, 50), "30 cm disc, 50 rings 3 mm apart (tools/make_meshes.py)")
+    write(os.path.join(here, "cusick_support.obj"), *cylinder(0.09, 0.3, 64, 4),
+          "18 cm support: cylinder r 0.09 m, h 0.3 m on z = 0 (tools/make_meshes.py)")
+    write(os.path.join(here, "table.obj"), *table(),
+          "table: top 1.2 x 0.8 x 0.04 m at 0.75 m, four 0.05 m legs, separate boxes (tools/make_meshes.py)")

@@ -5,18 +5,15 @@ hips.obj: a closed body of revolution about z, radius 0.15 m widening to 0.25 m 
 (z = 0.85 m), 1.3 m tall (40 segments around, 40 rows). skirt.obj: an open cone of cloth,
 radius 0.21 m at z = 1.15 m to 0.40 m at z = 0.55 m (72 around, 30 rows, alternate rows
 offset half a segment). paddle.obj: a closed box 0.8 x 0.05 x 0.3 m centred on the origin."""
-import math, os
+import math, os, sys
 
 HERE = os.path.dirname(os.path.abspath(__file__))
+sys.path.insert(0, os.path.join(HERE, "..", "..", "tools"))
+import make_meshes  # tools/make_meshes.py: the shipped meshes' writer
 
 
 def write(name, vertices, faces, comment):
-    with open(os.path.join(HERE, name), "w") as f:
-        f.write(f"# {comment}\n")
-        for v in vertices:
-            f.write("v %.9f %.9f %.9f\n" % v)
-        for a, b, c in faces:
-            f.write(f"f {a + 1} {b + 1} {c + 1}\n")
+    make_meshes.write(os.path.join(HERE, name), vertices, faces, comment)
 
 
 def hips():
