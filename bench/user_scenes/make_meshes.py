@@ -8,6 +8,7 @@ offset half a segment). paddle.obj: a closed box 0.8 x 0.05 x 0.3 m centred on t
 import math, os, sys
 
 HERE = os.path.dirname(os.path.abspath(__file__))
+sys.dont_write_bytecode = True  # no __pycache__ left in tools/
 sys.path.insert(0, os.path.join(HERE, "..", "..", "tools"))
 import make_meshes  # tools/make_meshes.py: the shipped meshes' writer
 
