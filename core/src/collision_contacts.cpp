@@ -16,14 +16,13 @@ bool inner(Scalar w) { return w > INNER_WEIGHT && w < 1 - INNER_WEIGHT; }
 }  // namespace
 
 std::vector<SolveContact> CollisionPipeline::mesh_contacts(const std::vector<Vec3>& start, Scalar t, Scalar h,
-                                                           Scalar reach) {
+                                                           Scalar reach, CollisionCounters& counters) {
   Impl& m = *impl_;
   std::vector<SolveContact> out;
   if (m.obstacles.empty()) return out;
   for (int v = 0; v < m.cloth_vertices; ++v) m.start[v] = m.end[v] = start[v];
   m.pose_obstacles(t, h);
-  CollisionCounters unused;
-  ccd::Candidates c = m.candidates(reach, unused, false);
+  ccd::Candidates c = m.candidates(reach, counters, false);
   // In a whole round's order (feature_pairs' owners leave the tests unsorted): which of several
   // nearly equal contacts is kept depends on it.
   const auto vf_key = [&](const ccd::VertexFacePair& p) {

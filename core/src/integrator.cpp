@@ -345,7 +345,7 @@ void Integrator::find_contacts(const State& state, StepReport& report) {
     if (shape.sphere) add_sphere_face_contacts(m, shape, state.time, state.positions, w.free_index, reach, w.contacts);
   }
   if (collisions_ && m.scene.collisions.obstacles) {
-    const auto mesh = collisions_->mesh_contacts(state.positions, state.time, h, reach);
+    const auto mesh = collisions_->mesh_contacts(state.positions, state.time, h, reach, report.collisions);
     w.contacts.insert(w.contacts.end(), mesh.begin(), mesh.end());
   }
   if (projective_) return;  // its contacts are terms of its objective, not blocks of a matrix

@@ -115,8 +115,10 @@ class CollisionPipeline {
   /// a cloth vertex and an obstacle's triangle, a cloth edge and an obstacle's edge (each
   /// closest at an inner point of both), an obstacle's vertex and a cloth triangle (closest
   /// inside it); for each cloth feature the nearest in each distinct direction (a rim gives
-  /// the top's and the side's). Each may not approach the obstacle within the step.
-  std::vector<SolveContact> mesh_contacts(const std::vector<Vec3>& start, Scalar t, Scalar h, Scalar reach);
+  /// the top's and the side's). Each may not approach the obstacle within the step. The broad
+  /// phase's time and pairs join counters.
+  std::vector<SolveContact> mesh_contacts(const std::vector<Vec3>& start, Scalar t, Scalar h, Scalar reach,
+                                          CollisionCounters& counters);
 
   /// The contacts of the cloth with itself at the step's start (self-collision on): each
   /// vertex-face and edge-edge pair of free vertices closer than reach times the gap the
