@@ -8,6 +8,7 @@
 #include <set>
 
 #include "commands.h"
+#include "drape/core/penetration.h"
 #include "drape/core/run.h"
 #include "drape/render/renderer.h"
 
@@ -95,6 +96,9 @@ std::optional<Model> load_model(const std::string& path, const char* command, co
     Model model = build_model(scene);
     if (const std::string note = thickness_note(model); !note.empty())
       std::cerr << "drape " << command << ": " << path << ": warning: " << note << "\n";
+    const StartCheck start = check_start(model);
+    if (!start.error.empty()) throw SceneError(start.error);
+    if (!start.warning.empty()) std::cerr << "drape " << command << ": " << path << ": warning: " << start.warning << "\n";
     return model;
   } catch (const SceneError& e) {
     std::cerr << "drape " << command << ": " << e.what() << "\n";

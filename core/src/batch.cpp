@@ -12,6 +12,7 @@
 #include "drape/core/fingerprint.h"
 #include "drape/core/model.h"
 #include "drape/core/output_file.h"
+#include "drape/core/penetration.h"
 #include "drape/core/run.h"
 
 namespace drape {
@@ -350,6 +351,7 @@ std::optional<BatchResult> run_batch_run(const Batch& batch, std::size_t index, 
     fs::remove(record, error);
     write_file_atomically(pending, run.out.string() + "\n");
     const Model model = build_model(load_with_overrides(run));
+    if (const StartCheck start = check_start(model); !start.error.empty()) throw SceneError(start.error);
     // An earlier folder of this run (its record lost when a job was killed) is replaced; one
     // this batch did not make, or holding anything drape did not write, is left alone.
     if (fs::exists(run.out)) {

@@ -234,4 +234,81 @@ std::vector<Penetration> find_penetrations(const Model& model, const std::vector
   return found;
 }
 
+namespace {
+
+// A cloth triangle (global index): its cloth and its number within that cloth's mesh.
+std::pair<std::size_t, int> cloth_of(const Model& model, int triangle) {
+  std::size_t c = 0;
+  while (c + 1 < model.cloths.size() && triangle >= model.cloths[c + 1].first_triangle) ++c;
+  return {c, triangle - model.cloths[c].first_triangle};
+}
+
+std::string cloth_name(const Model& model, std::size_t c) {
+  const ClothSpec& spec = model.scene.cloths[c];
+  return "/cloths/" + std::to_string(c) + (spec.grid ? " (a grid)" : " (" + spec.mesh_file.filename().string() + ")");
+}
+
+// One meeting pair as the scene names it.
+std::string pair_text(const Model& model, const Penetration& p) {
+  const bool cross = p.kind == PenetrationKind::Crossing, overlap = p.kind == PenetrationKind::CoplanarOverlap;
+  const auto [c, t] = cloth_of(model, p.triangle);
+  if (p.obstacle < 0) {
+    const auto [d, u] = cloth_of(model, p.other);
+    const std::string how = cross ? " pass through each other" : overlap ? " overlap in one plane" : " touch";
+    if (c == d) return cloth_name(model, c) + " triangles " + std::to_string(t) + " and " + std::to_string(u) + how;
+    return cloth_name(model, c) + " triangle " + std::to_string(t) + " and " + cloth_name(model, d) + " triangle " +
+           std::to_string(u) + how;
+  }
+  const ObstacleSpec& spec = model.obstacles[std::size_t(p.obstacle)].spec;
+  std::string obstacle = "/obstacles/" + std::to_string(p.obstacle);
+  if (spec.kind == ObstacleSpec::Kind::Sphere) obstacle += " (a sphere)";
+  else if (spec.kind == ObstacleSpec::Kind::Plane) obstacle += " (a plane: the half-space below it)";
+  else obstacle += " (" + spec.mesh_file.filename().string() + ") triangle " + std::to_string(p.other);
+  return cloth_name(model, c) + " triangle " + std::to_string(t) +
+         (cross ? " passes through " : overlap ? " overlaps in one plane with " : " touches ") + obstacle;
+}
+
+}  // namespace
+
+StartCheck check_start(const Model& model) {
+  constexpr std::size_t LIMIT = 100000;  // pairs examined at most (the count says "at least" then)
+  constexpr std::size_t SHOWN = 3;       // pairs described
+  std::vector<Penetration> meeting, inside, touching;
+  const CollisionSpec& collisions = model.scene.collisions;
+  const std::vector<Penetration> found = find_penetrations(model, model.initial_positions, 0, LIMIT);
+  for (const Penetration& p : found) {
+    if (p.obstacle < 0 ? !collisions.self : !collisions.obstacles) continue;
+    const bool analytic = p.obstacle >= 0 && model.obstacles[std::size_t(p.obstacle)].spec.kind != ObstacleSpec::Kind::Mesh;
+    (p.kind == PenetrationKind::Touching ? touching : analytic ? inside : meeting).push_back(p);
+  }
+  const auto listed = [&](const std::vector<Penetration>& pairs) {
+    std::string text;
+    for (std::size_t k = 0; k < pairs.size() && k < SHOWN; ++k) text += (k > 0 ? "; " : "") + pair_text(model, pairs[k]);
+    if (pairs.size() > SHOWN)
+      text += "; and " + std::string(found.size() >= LIMIT ? "at least " : "") + std::to_string(pairs.size() - SHOWN) + " more pairs";
+    return text;
+  };
+  StartCheck check;
+  if (!meeting.empty()) {
+    const bool self = std::any_of(meeting.begin(), meeting.end(), [](const Penetration& p) { return p.obstacle < 0; });
+    const bool obstacle = std::any_of(meeting.begin(), meeting.end(), [](const Penetration& p) { return p.obstacle >= 0; });
+    std::string expected = "expected a start free of intersections (drape keeps a cloth free of them only from such a start): ";
+    if (obstacle) expected += "the cloths clear of the obstacles (their transform), or collisions.obstacles false";
+    if (self && obstacle) expected += "; ";
+    if (self) expected += "each cloth's mesh free of self-intersections and the cloths clear of each other, or collisions.self false";
+    check.error = model.scene.file.string() + ": the scene starts with its meshes meeting (triangles counted from 0 in each mesh): " +
+                  listed(meeting) + "; " + expected;
+  }
+  // A sphere's or a plane's inside is known everywhere: the first step moves the vertices
+  // inside out to the surface (a kick the energy check may report).
+  if (!inside.empty())
+    check.warning = "the scene starts with cloth inside a sphere or below a plane, which its first step pushes out (triangles "
+                    "counted from 0 in each mesh): " + listed(inside);
+  if (!touching.empty())
+    check.warning += std::string(check.warning.empty() ? "" : "; and ") +
+                     "the scene starts with meshes touching (at distance exactly zero; triangles counted from 0 in each mesh), "
+                     "which the run keeps at most as close: " + listed(touching);
+  return check;
+}
+
 }  // namespace drape

@@ -88,6 +88,23 @@ TEST(RunCommand, ValidateAcceptsAndRejects) {
   EXPECT_EQ(run_drape("run " + SOURCE + "/scenes/flag.json --frames 0").status, 2);
 }
 
+// A scene whose cloth starts through a mesh obstacle is bad input (core's
+// StartCheck.RefusesMeshesThatMeetAtTheStartAndNamesThem has the cases): validate and run say so,
+// naming the scene, and the run writes nothing.
+TEST(RunCommand, AClothStartingThroughAMeshObstacleIsRefused) {
+  const fs::path scene = write_scene("through_box", R"({"cloths": [{"grid": {"resolution": [5, 5]}, "transform": {"translate": [0, 0, 0.1]}}],
+      "obstacles": [{"mesh": ")" + SOURCE + R"(/scenes/meshes/box.obj", "transform": {"scale": 0.5}}]})");
+  const Outcome validated = run_drape("validate " + scene.string());
+  EXPECT_EQ(validated.status, 2) << validated.output;
+  EXPECT_NE(validated.output.find(scene.string() + ": the scene starts with its meshes meeting"), std::string::npos)
+      << validated.output;
+  const fs::path out = temp_dir("through_box_run");
+  const Outcome ran = run_drape("run " + scene.string() + " --quiet --out " + out.string());
+  EXPECT_EQ(ran.status, 2) << ran.output;
+  EXPECT_NE(ran.output.find("passes through /obstacles/0 (box.obj) triangle"), std::string::npos) << ran.output;
+  EXPECT_FALSE(fs::exists(out / "stats.csv"));
+}
+
 TEST(RunCommand, EveryUserSceneInBenchValidatesAndRuns) {
   // bench/user_scenes/ (the scenes of the kind users bring, run in full by a benchmark) must
   // not rot as the scene format changes: each validates, runs two frames under --check and

@@ -38,6 +38,23 @@ struct Penetration {
 std::vector<Penetration> find_penetrations(const Model& model, const std::vector<Vec3>& positions, Scalar t,
                                            std::size_t limit = 1000);
 
+/// What a scene's start holds that its collisions cannot answer for: the pairs that meet at
+/// time 0 (find_penetrations) among those the scene's collisions keep apart (a cloth and an
+/// obstacle with collisions.obstacles on, two cloth triangles with collisions.self on). The
+/// collision pipeline keeps a cloth free of intersections from a start free of them; it does
+/// not part meshes that already pass through each other (it holds them as they are, or its
+/// fail-safe freezes the cloth). error: the pairs of cloth triangles, or of a cloth triangle
+/// and a mesh obstacle's, that cross or overlap in a plane, described for the scene's file
+/// (its JSON paths, each cloth's and obstacle's mesh file and triangle numbers, the count)
+/// with what is expected instead; empty when there are none. warning: cloth inside a sphere or
+/// below a plane (whose inside is known everywhere: the first step pushes its vertices out),
+/// and the pairs that only touch (at distance exactly zero), which the run starts from and
+/// keeps at most as close; empty when there are none.
+struct StartCheck {
+  std::string error, warning;
+};
+StartCheck check_start(const Model& model);
+
 using TriangleCorners = std::array<Vec3, 3>;
 
 /// How two triangles (closed, possibly degenerate) meet, exactly; nullopt when they do not.
