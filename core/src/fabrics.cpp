@@ -49,11 +49,11 @@ FabricPreset fabric_preset(const MeasuredFabric& fabric) {
   return p;
 }
 
-void apply_fabric_preset(const MeasuredFabric& fabric, bool grid, Material& material) {
+void apply_fabric_preset(const MeasuredFabric& fabric, Material& material) {
   const FabricPreset p = fabric_preset(fabric);
   material.density = p.density;
   material.tensile_stiffness = p.tensile_stiffness;
-  if (grid) material.shear_stiffness = p.shear_stiffness;
+  material.shear_stiffness = p.shear_stiffness;
   material.bending_rigidity = p.bending_rigidity;
 }
 

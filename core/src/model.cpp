@@ -3,9 +3,11 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdio>
 #include <fstream>
+#include <limits>
 #include <map>
 #include <sstream>
 #include <utility>
@@ -87,11 +89,12 @@ void add_fabric_grid_springs(Model& model, const GridMesh& grid, const GridSprin
   add_edge_springs(model, springs.shear, offset, m.damping, SpringKind::Shear, [&](std::size_t, Scalar) { return kd; });
 }
 
-// The edge springs of a fabric's tensile stiffness T on a triangle mesh: each edge gets T
-// times its triangles' area over its length squared (van Gelder, "Approximate simulation of
-// elastic membranes by triangulated spring meshes", 1998), which makes a mesh of equilateral
-// triangles an isotropic sheet of tensile stiffness T (Poisson's ratio 1/3, shear 3 T / 8).
-void add_fabric_mesh_springs(Model& model, const TriangleMesh& mesh, int offset, const Material& m) {
+// The edge springs of a fabric's tensile stiffness T on a triangle mesh with no shear
+// stiffness given: each edge gets T times its triangles' area over its length squared (van
+// Gelder, "Approximate simulation of elastic membranes by triangulated spring meshes", 1998),
+// which makes a mesh of equilateral triangles an isotropic sheet of tensile stiffness T
+// (Poisson's ratio 1/3, shear 3 T / 8).
+void add_isotropic_mesh_springs(Model& model, const TriangleMesh& mesh, int offset, const Material& m) {
   std::map<Edge, Scalar> area;
   for (const Triangle& t : mesh.triangles) {
     const Vec3& p = model.initial_positions[std::size_t(t[0] + offset)];
@@ -103,6 +106,89 @@ void add_fabric_mesh_springs(Model& model, const TriangleMesh& mesh, int offset,
   const std::vector<Edge> edges = mesh_edges(mesh);
   add_edge_springs(model, edges, offset, m.damping, SpringKind::Stretch,
                    [&](std::size_t e, Scalar rest) { return m.tensile_stiffness * area[edges[e]] / (rest * rest); });
+}
+
+// One triangle's share of its three edges' spring constants for the grid's sheet of tensile
+// stiffness T and shear stiffness G (add_fabric_grid_springs: C11 = C22 = s, C12 = C66 = G).
+// A spring of constant k and rest length l along the unit direction (c, s) of the fabric's
+// warp and weft in the triangle's plane adds w = k l^2 / A to the stiffness of a sheet of the
+// triangle's area A: C11 += w c^4, C22 += w s^4, C12 = C66 += w c^2 s^2 (a spring network
+// obeys Cauchy's relation C12 = C66, as the grid's does). Where the three equations have a
+// solution with every weight positive (edges along the warp, the weft and a diagonal, as in a
+// grid exported as right triangles), that is the triangle's share. Elsewhere (an equilateral
+// triangle's springs give C22 = 3 C66 whatever their weights when an edge lies along the
+// warp) the tension comes first: the least squares of the three equations with the tension's
+// relative errors TENSION_FIRST times the shear's, every weight at least MIN_WEIGHT s (a
+// triangle with a spring of no weight is a mechanism: an irregular cloth without the floor
+// stretched a spring 2.7 times over within 10 frames), found over the subsets of the edges.
+constexpr Scalar TENSION_FIRST = 1e4;
+constexpr Scalar MIN_WEIGHT = 0.05;
+std::array<Scalar, 3> fit_triangle_springs(const std::array<Eigen::Matrix<Scalar, 2, 1>, 3>& directions, Scalar s, Scalar G) {
+  Eigen::Matrix<Scalar, 3, 3> M;  // each equation relative to its target, the tension's weighed
+  for (int e = 0; e < 3; ++e) {
+    const Scalar c2 = directions[std::size_t(e)].x() * directions[std::size_t(e)].x();
+    const Scalar s2 = directions[std::size_t(e)].y() * directions[std::size_t(e)].y();
+    M.col(e) << TENSION_FIRST * c2 * c2 / s, TENSION_FIRST * s2 * s2 / s, c2 * s2 / G;
+  }
+  const Eigen::Matrix<Scalar, 3, 1> goal(TENSION_FIRST, TENSION_FIRST, 1);
+  const Eigen::Matrix<Scalar, 3, 1> exact = M.colPivHouseholderQr().solve(goal);
+  if (exact.allFinite() && (exact.array() > 0).all() && (M * exact - goal).norm() < 1e-9 * goal.norm())
+    return {exact[0], exact[1], exact[2]};
+  const Scalar floor = MIN_WEIGHT * s;
+  const Eigen::Matrix<Scalar, 3, 1> target = goal - M * Eigen::Matrix<Scalar, 3, 1>::Constant(floor);
+  Scalar best = std::numeric_limits<Scalar>::infinity();
+  std::array<Scalar, 3> weights{floor, floor, floor};
+  for (int subset = 7; subset >= 1; --subset) {  // every edge first
+    std::array<int, 3> used{};
+    int count = 0;
+    for (int e = 0; e < 3; ++e)
+      if (subset & (1 << e)) used[std::size_t(count++)] = e;
+    Eigen::Matrix<Scalar, 3, Eigen::Dynamic> A(3, count);
+    for (int k = 0; k < count; ++k) A.col(k) = M.col(used[std::size_t(k)]);
+    const Eigen::Matrix<Scalar, Eigen::Dynamic, 1> w = A.colPivHouseholderQr().solve(target);
+    if (!w.allFinite() || (w.array() < 0).any()) continue;
+    const Scalar residual = (A * w - target).norm();
+    if (residual < best) {
+      best = residual;
+      weights = {floor, floor, floor};
+      for (int k = 0; k < count; ++k) weights[std::size_t(used[std::size_t(k)])] += w[k];
+    }
+  }
+  return weights;
+}
+
+// The edge springs of a fabric's tensile stiffness T and shear stiffness G on a triangle mesh:
+// each triangle's share fitted (fit_triangle_springs) with the warp the cloth's local x axis
+// (warp, after its transform) laid into the triangle's plane (its y axis where the triangle
+// faces x), an edge's constant the sum of its triangles' w A / l^2.
+void add_fabric_mesh_springs(Model& model, const TriangleMesh& mesh, int offset, const Material& m, const Vec3& warp,
+                            const Vec3& weft) {
+  const Scalar T = m.tensile_stiffness, G = m.shear_stiffness;
+  const Scalar s = 0.5 * (T + std::hypot(T, 2 * G));
+  std::map<Edge, Scalar> constant;
+  for (const Triangle& t : mesh.triangles) {
+    const auto x = [&](int k) -> const Vec3& { return model.initial_positions[std::size_t(t[std::size_t(k)] + offset)]; };
+    const Vec3 normal = (x(1) - x(0)).cross(x(2) - x(0));
+    const Scalar area = 0.5 * normal.norm();
+    const Vec3 n = normal.normalized();
+    Vec3 u = warp - warp.dot(n) * n;
+    if (u.norm() < 0.5) u = weft - weft.dot(n) * n;  // the triangle faces the warp
+    u.normalize();
+    const Vec3 v = n.cross(u);
+    std::array<Eigen::Matrix<Scalar, 2, 1>, 3> directions;
+    std::array<Scalar, 3> lengths{};
+    for (int k = 0; k < 3; ++k) {
+      const Vec3 d = x((k + 1) % 3) - x(k);
+      lengths[std::size_t(k)] = d.norm();
+      directions[std::size_t(k)] = Eigen::Matrix<Scalar, 2, 1>(d.dot(u), d.dot(v)) / lengths[std::size_t(k)];
+    }
+    const std::array<Scalar, 3> w = fit_triangle_springs(directions, s, G);
+    for (int k = 0; k < 3; ++k)
+      constant[Edge{std::min(t[k], t[(k + 1) % 3]), std::max(t[k], t[(k + 1) % 3])}] +=
+          w[std::size_t(k)] * area / (lengths[std::size_t(k)] * lengths[std::size_t(k)]);
+  }
+  const std::vector<Edge> edges = mesh_edges(mesh);
+  add_edge_springs(model, edges, offset, m.damping, SpringKind::Stretch, [&](std::size_t e, Scalar) { return constant[edges[e]]; });
 }
 
 // A hinge weight below this share of the hinge's largest is a right angle's zero (a
@@ -339,8 +425,15 @@ Model build_model(const Scene& scene) {
       }
       add_springs(model, springs.bend, offset, bend_springs, m.damping, SpringKind::Bend);
     } else {
-      if (fabric) add_fabric_mesh_springs(model, mesh, offset, m);
-      else add_springs(model, mesh_edges(mesh), offset, m.stretch, m.damping, SpringKind::Stretch);
+      if (fabric && m.shear_stiffness > 0) {
+        const Vec3 origin = spec.transform.apply(Vec3::Zero());
+        add_fabric_mesh_springs(model, mesh, offset, m, (spec.transform.apply(Vec3::UnitX()) - origin).normalized(),
+                                (spec.transform.apply(Vec3::UnitY()) - origin).normalized());
+      } else if (fabric) {
+        add_isotropic_mesh_springs(model, mesh, offset, m);
+      } else {
+        add_springs(model, mesh_edges(mesh), offset, m.stretch, m.damping, SpringKind::Stretch);
+      }
       add_springs(model, bending_pairs(mesh), offset, bend_springs, m.damping, SpringKind::Bend);
     }
     Scalar diagonal_limit = 0;  // a grid's shear springs' (Material::shear_locking_angle)

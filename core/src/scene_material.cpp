@@ -12,7 +12,7 @@ void read_material(const Node& m, bool grid, Material& material) {
   const MeasuredFabric* preset = m.has("preset") ? find_measured_fabric(m.at("preset").string()) : nullptr;
   if (m.has("preset") && !preset)
     m.at("preset").fail("expected a fabric preset: one of " + measured_fabric_names() + " (docs/materials.md)");
-  if (preset) apply_fabric_preset(*preset, grid, material);
+  if (preset) apply_fabric_preset(*preset, material);
   // A material is the springs' constants or the fabric's measurements, not a mix: a spring
   // key beside the fabric's stiffnesses would be silently ignored or (bend springs) stiffen
   // the sheet by an amount that depends on the resolution.
@@ -24,9 +24,8 @@ void read_material(const Node& m, bool grid, Material& material) {
       m.at(spring).fail(std::string("expected no '") + spring + "' beside " +
                         (preset ? "a 'preset'" : "'tensile_stiffness' and 'shear_stiffness' (N/m)") +
                         ": the fabric's keys set the springs, and its bending is 'bending_rigidity' (N m)");
-  if (!grid && m.has("shear_stiffness"))
-    m.at("shear_stiffness").fail("a mesh cloth's springs lie on its edges: its shear stiffness follows from "
-                                 "'tensile_stiffness' (3/8 of it for equilateral triangles); expected that key alone");
+  if (!grid && !preset && m.has("shear_stiffness") && !m.has("tensile_stiffness"))
+    m.at("shear_stiffness").fail("expected 'tensile_stiffness' (N/m) beside it: a mesh's edge springs are fitted to both");
   if (grid && fabric && !preset && !(m.has("tensile_stiffness") && m.has("shear_stiffness")))
     m.at(m.has("tensile_stiffness") ? "tensile_stiffness" : "shear_stiffness")
         .fail("expected 'tensile_stiffness' and 'shear_stiffness' together (N/m): a grid's springs need both");

@@ -240,12 +240,13 @@ TEST(Scene, BadMeshesAreRejectedWithTheirProblem) {
       << error_of(scene_with("nonmanifold.obj"));
   EXPECT_NE(error_of(scene_with("degenerate.obj")).find("zero area"), std::string::npos) << error_of(scene_with("degenerate.obj"));
   EXPECT_NE(error_of(scene_with("garbage.obj")).find("/cloths/0/mesh:"), std::string::npos) << error_of(scene_with("garbage.obj"));
-  // A mesh's springs lie on its edges: the fabric's shear stiffness is not the scene's to give.
-  const std::string shear = R"({"cloths": [{"mesh": ")" + (dir / "good.obj").string() +
-                            R"(", "material": {"tensile_stiffness": 300, "shear_stiffness": 30}}]})";
-  EXPECT_NE(error_of(shear).find("/cloths/0/material/shear_stiffness: a mesh cloth's springs lie on its edges"),
+  // A mesh's springs are fitted to the tensile and shear stiffness together: a shear stiffness
+  // alone is refused, both are taken.
+  const std::string shear = R"({"cloths": [{"mesh": ")" + (dir / "good.obj").string() + R"(", "material": {)";
+  EXPECT_NE(error_of(shear + R"("shear_stiffness": 30}}]})").find("/cloths/0/material/shear_stiffness: expected 'tensile_stiffness'"),
             std::string::npos)
-      << error_of(shear);
+      << error_of(shear + R"("shear_stiffness": 30}}]})");
+  EXPECT_EQ(error_of(shear + R"("tensile_stiffness": 300, "shear_stiffness": 30}}]})"), "");
   EXPECT_EQ(error_of(scene_with("good.obj")), "");
   // A NaN is never welded into a finite vertex: the mesh check sees it.
   std::ofstream(dir / "nan.obj") << "v nan 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nf 1 2 3\nf 1 3 4\n";

@@ -61,8 +61,8 @@ inline constexpr Scalar HINGE_CONSTANT_TO_RIGIDITY = 0.25;
 /// 2 e_uv); the bending rigidity is HINGE_CONSTANT_TO_RIGIDITY times the mean hinge constant.
 FabricPreset fabric_preset(const MeasuredFabric& fabric);
 
-/// Sets a material's fabric keys to the preset's: density, tensile stiffness, bending rigidity
-/// and, on a grid (`grid`), shear stiffness (a mesh's shear follows from its tensile stiffness).
-void apply_fabric_preset(const MeasuredFabric& fabric, bool grid, Material& material);
+/// Sets a material's fabric keys to the preset's: density, tensile and shear stiffness, bending
+/// rigidity (on a grid and on a mesh alike).
+void apply_fabric_preset(const MeasuredFabric& fabric, Material& material);
 
 }  // namespace drape
