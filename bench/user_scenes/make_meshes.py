@@ -4,8 +4,12 @@ the shipped ones (bench/user_scenes/README.md). Run once; the files are committe
 hips.obj: a closed body of revolution about z, radius 0.15 m widening to 0.25 m at the hips
 (z = 0.85 m), 1.3 m tall (40 segments around, 40 rows). skirt.obj: an open cone of cloth,
 radius 0.21 m at z = 1.15 m to 0.40 m at z = 0.55 m (72 around, 30 rows, alternate rows
-offset half a segment). paddle.obj: a closed box 0.8 x 0.05 x 0.3 m centred on the origin."""
-import math, os, sys
+offset half a segment). paddle.obj: a closed box 0.8 x 0.05 x 0.3 m centred on the origin.
+irregular_cloth.obj: a 1 m square of cloth in z = 0, 48 x 48 cells whose inner vertices are
+moved by up to 0.42 of a cell (a fixed pseudo-random sequence), each cell's diagonal drawn
+either way at random unless that would turn a triangle over: an irregular triangulation of the
+kind a remesher or a garment tool writes (edges from 4.6 to 51 mm)."""
+import math, os, random, sys
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 sys.dont_write_bytecode = True  # no __pycache__ left in tools/
@@ -67,7 +71,35 @@ def paddle(sx, sy, sz):
     return v, f
 
 
+def irregular_cloth(cells=48, size=1.0, jitter=0.42, seed=7):
+    rng = random.Random(seed)
+    cell = size / cells
+    v = []
+    for j in range(cells + 1):
+        for i in range(cells + 1):
+            x, y = -size / 2 + i * cell, -size / 2 + j * cell
+            if 0 < i < cells:
+                x += rng.uniform(-jitter, jitter) * cell
+            if 0 < j < cells:
+                y += rng.uniform(-jitter, jitter) * cell
+            v.append((x, y, 0.0))
+    area = lambda p, q, r: (v[q][0] - v[p][0]) * (v[r][1] - v[p][1]) - (v[q][1] - v[p][1]) * (v[r][0] - v[p][0])
+    f = []
+    for j in range(cells):
+        for i in range(cells):
+            a = j * (cells + 1) + i
+            b, c = a + 1, a + cells + 1
+            d = c + 1
+            one, two = [(a, b, d), (a, d, c)], [(a, b, c), (b, d, c)]
+            pick = one if rng.random() < 0.5 else two
+            if min(area(*t) for t in pick) <= 0:
+                pick = two if pick is one else one
+            f += pick
+    return v, f
+
+
 if __name__ == "__main__":
     write("hips.obj", *hips(), "a body of revolution widening at the hips (bench/user_scenes/make_meshes.py)")
     write("skirt.obj", *skirt(), "an open cone of cloth, a skirt (bench/user_scenes/make_meshes.py)")
     write("paddle.obj", *paddle(0.8, 0.05, 0.3), "a closed box 0.8 x 0.05 x 0.3 m (bench/user_scenes/make_meshes.py)")
+    write("irregular_cloth.obj", *irregular_cloth(), "an irregular triangulation of a 1 m square (bench/user_scenes/make_meshes.py)")
