@@ -346,6 +346,17 @@ RunOutcome run_simulation(const Model& model, const RunSettings& settings, const
       row.messages.push_back(text);
       if (row.max_stretch > limits.stretch_stop && stop.empty()) stop = text;
     }
+    // The response's last resort: not a limit of the scene's, but a frame whose cloth it froze
+    // in part is not the simulation the user asked for, so it is said and counted too.
+    if (row.collisions.fail_safes > 0) {
+      ++row.warnings;
+      std::snprintf(text, sizeof text,
+                    "the collision response's fail-safe held colliding cloth vertices at their start positions in %ld "
+                    "step(s) (column fail_safes): its impulse and impact-zone rounds (collisions.max_impulse_iterations "
+                    "and max_zone_iterations) left a collision",
+                    long(row.collisions.fail_safes));
+      row.messages.push_back(text);
+    }
     try {
       write_frame(state, row);
     } catch (const std::runtime_error& e) {

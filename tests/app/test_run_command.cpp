@@ -181,6 +181,26 @@ TEST(RunCommand, EnergyPastTheLimitsWarnsOnTheTerminalAndStops) {
   EXPECT_EQ(lines(stopped / "stats.csv").size(), 3u);
 }
 
+// A frame in which the collision response's fail-safe froze colliding vertices is said and
+// counted as a warning: with no impulse or impact-zone round allowed, a cloth thrown at a mesh
+// box at 30 m/s (the cg solver: its contacts are the response's alone) reaches the fail-safe
+// on its first contact.
+TEST(RunCommand, TheCollisionFailSafeWarnsOnTheTerminal) {
+  const fs::path scene = write_scene("fail_safe", R"({"frames": 4, "cloths": [{"grid": {"resolution": [6, 6]},
+      "transform": {"translate": [0, 0, 0.62]}, "velocity": [0, 0, -30]}],
+      "obstacles": [{"mesh": ")" + SOURCE + R"(/scenes/meshes/box.obj"}], "solver": {"type": "cg"},
+      "collisions": {"max_impulse_iterations": 0, "max_zone_iterations": 0}})");
+  const fs::path out = temp_dir("fail_safe_run");
+  const Outcome ran = run_drape("run " + scene.string() + " --quiet --out " + out.string());
+  EXPECT_EQ(ran.status, 0) << ran.output;
+  EXPECT_NE(ran.output.find("the collision response's fail-safe held colliding cloth vertices"), std::string::npos) << ran.output;
+  const auto rows = lines(out / "stats.csv");
+  ASSERT_EQ(rows.size(), 6u);
+  int warned = 0;
+  for (std::size_t r = 1; r < rows.size(); ++r) warned += rows[r].substr(rows[r].rfind(',') + 1) != "0";
+  EXPECT_GT(warned, 0);
+}
+
 TEST(RunCommand, InterruptKeepsEveryFinishedFrame) {
   const fs::path out = temp_dir("interrupted");
   const pid_t child = fork();

@@ -1,7 +1,8 @@
 // A fabric's own units (material `mass_per_area`, `tensile_stiffness`, `shear_stiffness`):
-// the springs' network stores what the sheet would under homogeneous strain (grids and
-// equilateral meshes), and a strip hanging under its weight stretches as the fabric would, at
-// any resolution. Their refusals are in test_scene.cpp.
+// the springs' network stores what the sheet would under homogeneous strain (grids, equilateral
+// meshes with the tensile stiffness alone, meshes fitted to both stiffnesses), and a strip
+// hanging under its weight stretches as the fabric would, at any resolution. Their refusals are
+// in test_scene.cpp.
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -230,6 +231,8 @@ TEST(Fabric, AnIrregularMeshKeepsTheTensionAndShearsLessThanAnIsotropicOne) {
     EXPECT_NEAR(x, 1, 0.01) << jitter;
     EXPECT_NEAR(y, 1, 0.01) << jitter;
     EXPECT_LT(sheared, 0.7 * before) << jitter;
-    if (jitter < 0.2) EXPECT_LT(sheared, 10) << jitter;
+    if (jitter < 0.2) {
+      EXPECT_LT(sheared, 10) << jitter;
+    }
   }
 }
