@@ -109,7 +109,7 @@ void add_isotropic_mesh_springs(Model& model, const TriangleMesh& mesh, int offs
 }
 
 // One triangle's share of its three edges' spring constants for the grid's sheet of tensile
-// stiffness T and shear stiffness G (add_fabric_grid_springs: C11 = C22 = s, C12 = C66 = G).
+// stiffness T and shear stiffness G (add_fabric_grid_springs: C11 = C22 = axial, C12 = C66 = G).
 // A spring of constant k and rest length l along the unit direction (c, s) of the fabric's
 // warp and weft in the triangle's plane adds w = k l^2 / A to the stiffness of a sheet of the
 // triangle's area A: C11 += w c^4, C22 += w s^4, C12 = C66 += w c^2 s^2 (a spring network
@@ -118,23 +118,24 @@ void add_isotropic_mesh_springs(Model& model, const TriangleMesh& mesh, int offs
 // grid exported as right triangles), that is the triangle's share. Elsewhere (an equilateral
 // triangle's springs give C22 = 3 C66 whatever their weights when an edge lies along the
 // warp) the tension comes first: the least squares of the three equations with the tension's
-// relative errors TENSION_FIRST times the shear's, every weight at least MIN_WEIGHT s (a
+// relative errors TENSION_FIRST times the shear's, every weight at least MIN_WEIGHT axial (a
 // triangle with a spring of no weight is a mechanism: an irregular cloth without the floor
 // stretched a spring 2.7 times over within 10 frames), found over the subsets of the edges.
 constexpr Scalar TENSION_FIRST = 1e4;
 constexpr Scalar MIN_WEIGHT = 0.05;
-std::array<Scalar, 3> fit_triangle_springs(const std::array<Eigen::Matrix<Scalar, 2, 1>, 3>& directions, Scalar s, Scalar G) {
+std::array<Scalar, 3> fit_triangle_springs(const std::array<Eigen::Matrix<Scalar, 2, 1>, 3>& directions, Scalar axial,
+                                           Scalar G) {
   Eigen::Matrix<Scalar, 3, 3> M;  // each equation relative to its target, the tension's weighed
   for (int e = 0; e < 3; ++e) {
     const Scalar c2 = directions[std::size_t(e)].x() * directions[std::size_t(e)].x();
     const Scalar s2 = directions[std::size_t(e)].y() * directions[std::size_t(e)].y();
-    M.col(e) << TENSION_FIRST * c2 * c2 / s, TENSION_FIRST * s2 * s2 / s, c2 * s2 / G;
+    M.col(e) << TENSION_FIRST * c2 * c2 / axial, TENSION_FIRST * s2 * s2 / axial, c2 * s2 / G;
   }
   const Eigen::Matrix<Scalar, 3, 1> goal(TENSION_FIRST, TENSION_FIRST, 1);
   const Eigen::Matrix<Scalar, 3, 1> exact = M.colPivHouseholderQr().solve(goal);
   if (exact.allFinite() && (exact.array() > 0).all() && (M * exact - goal).norm() < 1e-9 * goal.norm())
     return {exact[0], exact[1], exact[2]};
-  const Scalar floor = MIN_WEIGHT * s;
+  const Scalar floor = MIN_WEIGHT * axial;
   const Eigen::Matrix<Scalar, 3, 1> target = goal - M * Eigen::Matrix<Scalar, 3, 1>::Constant(floor);
   Scalar best = std::numeric_limits<Scalar>::infinity();
   std::array<Scalar, 3> weights{floor, floor, floor};
@@ -164,7 +165,7 @@ std::array<Scalar, 3> fit_triangle_springs(const std::array<Eigen::Matrix<Scalar
 void add_fabric_mesh_springs(Model& model, const TriangleMesh& mesh, int offset, const Material& m, const Vec3& warp,
                             const Vec3& weft) {
   const Scalar T = m.tensile_stiffness, G = m.shear_stiffness;
-  const Scalar s = 0.5 * (T + std::hypot(T, 2 * G));
+  const Scalar axial = 0.5 * (T + std::hypot(T, 2 * G));
   std::map<Edge, Scalar> constant;
   for (const Triangle& t : mesh.triangles) {
     const auto x = [&](int k) -> const Vec3& { return model.initial_positions[std::size_t(t[std::size_t(k)] + offset)]; };
@@ -182,7 +183,7 @@ void add_fabric_mesh_springs(Model& model, const TriangleMesh& mesh, int offset,
       lengths[std::size_t(k)] = d.norm();
       directions[std::size_t(k)] = Eigen::Matrix<Scalar, 2, 1>(d.dot(u), d.dot(v)) / lengths[std::size_t(k)];
     }
-    const std::array<Scalar, 3> w = fit_triangle_springs(directions, s, G);
+    const std::array<Scalar, 3> w = fit_triangle_springs(directions, axial, G);
     for (int k = 0; k < 3; ++k)
       constant[Edge{std::min(t[k], t[(k + 1) % 3]), std::max(t[k], t[(k + 1) % 3])}] +=
           w[std::size_t(k)] * area / (lengths[std::size_t(k)] * lengths[std::size_t(k)]);
