@@ -13,6 +13,7 @@
 #include <unistd.h>
 
 #include "drape/core/integrator.h"
+#include "drape/core/mesh.h"
 #include "../temp_root.h"
 
 using namespace drape;
@@ -118,11 +119,7 @@ TEST(Fabric, AnEquilateralMeshIsAnIsotropicSheet) {
   const Scalar T = 300, e = 1e-6;
   const Model model = model_of(R"({"gravity": [0, 0, 0], "cloths": [{"mesh": ")" + (dir / "strip.obj").string() +
                                R"(", "material": {"tensile_stiffness": 300}}]})");
-  Scalar area = 0;
-  for (const Triangle& t : model.triangles)
-    area += 0.5 * (model.initial_positions[t[1]] - model.initial_positions[t[0]])
-                      .cross(model.initial_positions[t[2]] - model.initial_positions[t[0]])
-                      .norm();
+  const Scalar area = surface_area(model.cloth_mesh(model.initial_positions));
   Eigen::Matrix<Scalar, 2, 2> shear, along_x, along_y;
   shear << 1, e, 0, 1;
   along_x << 1 + e, 0, 0, 1 - e / 3;
@@ -173,15 +170,6 @@ std::filesystem::path sheet_mesh(const std::string& name, Scalar w, Scalar h, in
   return dir / name;
 }
 
-Scalar mesh_area(const Model& model) {
-  Scalar area = 0;
-  for (const Triangle& t : model.triangles)
-    area += 0.5 * (model.initial_positions[t[1]] - model.initial_positions[t[0]])
-                      .cross(model.initial_positions[t[2]] - model.initial_positions[t[0]])
-                      .norm();
-  return area;
-}
-
 }  // namespace
 
 // A mesh cloth with a shear stiffness (a preset's, or the key): each triangle's edge springs
@@ -196,7 +184,7 @@ TEST(Fabric, AGridExportedAsAMeshShearsAsTheFabric) {
   const auto mesh = sheet_mesh("right.obj", 0.6, 0.4, 12, 8, 0);
   const Model model = model_of(R"({"gravity": [0, 0, 0], "cloths": [{"mesh": ")" + mesh.string() +
                                R"(", "material": {"tensile_stiffness": 800, "shear_stiffness": 30}}]})");
-  const Scalar area = mesh_area(model);
+  const Scalar area = surface_area(model.cloth_mesh(model.initial_positions));
   Eigen::Matrix<Scalar, 2, 2> shear, along_x, along_y;
   shear << 1, e, 0, 1;
   along_x << 1 + e, 0, 0, 1 - nu * e;
@@ -223,7 +211,8 @@ TEST(Fabric, AnIrregularMeshKeepsTheTensionAndShearsLessThanAnIsotropicOne) {
     const std::string cloth = R"({"gravity": [0, 0, 0], "cloths": [{"mesh": ")" + mesh.string() + R"(", "material": )";
     const Model fitted = model_of(cloth + R"({"tensile_stiffness": 4030, "shear_stiffness": 19.2}}]})");
     const Model isotropic = model_of(cloth + R"({"tensile_stiffness": 4030}}]})");
-    const Scalar area = mesh_area(fitted), per_g = 0.5 * G * e * e * area, per_t = 0.5 * T * e * e * area;
+    const Scalar area = surface_area(fitted.cloth_mesh(fitted.initial_positions));
+    const Scalar per_g = 0.5 * G * e * e * area, per_t = 0.5 * T * e * e * area;
     const Scalar sheared = strain_energy(fitted, shear) / per_g, before = strain_energy(isotropic, shear) / per_g;
     const Scalar x = strain_energy(fitted, along_x) / per_t, y = strain_energy(fitted, along_y) / per_t;
     std::printf("jitter %.1f: shear %.1f G (isotropic springs %.1f G), stretch along x %.4f T, along y %.4f T\n", jitter,
