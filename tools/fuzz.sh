@@ -14,11 +14,12 @@ if [ "${1:-}" = "--long" ]; then FUZZ_SECONDS=${FUZZ_SECONDS:-600}; fi
 bash tools/install-deps.sh
 BUILD_DIR=${BUILD_DIR:-build-fuzz}
 if [ -n "${FUZZ_SECONDS:-}" ]; then LIMIT="-max_total_time=$FUZZ_SECONDS"; else LIMIT="-runs=${FUZZ_RUNS:-100000} -seed=20261122"; fi
-FLAGS="-fsanitize=fuzzer-no-link,address,undefined -fno-sanitize-recover=all -O1 -g"
+# Line tables only, as in test-sanitized.sh: a crash's stack keeps its files and lines.
+FLAGS="-fsanitize=fuzzer-no-link,address,undefined -fno-sanitize-recover=all -O1 -gline-tables-only"
 # The CCD kernels for Highway's portable target alone: the fuzzers test the readers, and clang
 # 14 with the fuzzer's instrumentation and ASan took over 45 minutes of CPU on the kernels'
 # four instruction sets (kernels_batch.cpp alone), where GCC's sanitized build takes a minute.
-CC=clang CXX=clang++ cmake -S . -B "$BUILD_DIR" -DCMAKE_BUILD_TYPE=Debug -DDRAPE_BUILD_TESTS=OFF -DDRAPE_BUILD_BENCH=OFF \
+CC=clang CXX=clang++ cmake -S . -B "$BUILD_DIR" -DCMAKE_BUILD_TYPE=Debug -DCMAKE_CXX_FLAGS_DEBUG=-gline-tables-only -DDRAPE_BUILD_TESTS=OFF -DDRAPE_BUILD_BENCH=OFF \
   -DDRAPE_PORTABLE_KERNELS=ON -DDRAPE_BUILD_FUZZERS=ON -DCMAKE_CXX_FLAGS="$FLAGS" -DCMAKE_EXE_LINKER_FLAGS="-fsanitize=address,undefined" >/dev/null
 cmake --build "$BUILD_DIR" -j"${JOBS:-2}" --target fuzz_scene fuzz_query_file fuzz_mesh fuzz_frame
 export ASAN_OPTIONS=${ASAN_OPTIONS:-"detect_leaks=0"}
