@@ -1,9 +1,14 @@
 #!/usr/bin/env bash
 # The textile laboratory's two tests on every fabric preset (issue 20; docs/materials.md):
 # - the Cusick drape test (scenes/cusick_drape.json with each preset) on the 30 cm disc at three
-#   resolutions, each about twice the last: 12.5, 6 and 3 mm edges (scenes/meshes/
-#   disc_30cm_12mm.obj, 12 rings, 469 vertices; disc_30cm.obj, 25 rings, 1,951 vertices;
-#   disc_30cm_3mm.obj, 50 rings, 7,651 vertices), each run in full (2 s) with the independent
+#   resolutions, each twice the last: the disc cut from a square grid 12.5, 6.25 and 3.125 mm
+#   apart along the fabric's warp and weft (scenes/meshes/disc_30cm_grid_12mm.obj, 441
+#   vertices; disc_30cm_grid.obj, 1,793; disc_30cm_grid_3mm.obj, 7,213), whose right triangles
+#   hold the fabric's tension and shear exactly (docs/materials.md); the ring discs
+#   (disc_30cm_12mm.obj, 12 rings 12.5 mm apart, 469 vertices; disc_30cm.obj, the shipped
+#   scene's, 25 rings, 1,951; disc_30cm_3mm.obj, 50 rings, 7,651), near-equilateral triangles
+#   that are stiffer in shear than the fabric, by MESHES (docs/benchmarks.md compares them).
+#   Each run in full (2 s) with the independent
 #   penetration check (--check): the drape coefficient and nodes at the last frame (and at
 #   frame 40, to show how settled it is; with the shallowest node's depth, to show a count that
 #   hangs on the 0.45 cm threshold), and the coefficient's change from each resolution to the
@@ -13,7 +18,8 @@
 # Prints one line per preset and exits 1 when a run fails or finds an intersection. Long
 # (about 40 minutes on this 2-core machine, most of it the 3 mm discs): a benchmark, not a test.
 # Usage: bench/textile_runs.sh [BUILD_DIR] [OUT]; PRESETS="royal-target ..." for a subset,
-# MESHES="disc_30cm_12mm.obj disc_30cm.obj" for fewer resolutions, COMPRESSION=0.01 to give
+# MESHES="disc_30cm_grid_12mm.obj disc_30cm_grid.obj" for fewer resolutions or
+# MESHES="disc_30cm_12mm.obj disc_30cm.obj disc_30cm_3mm.obj" for the ring discs, COMPRESSION=0.01 to give
 # every run's material that `compression` (docs/materials.md; default: the presets' linear springs),
 # SPECIMENS=K for K specimens a resolution in place of one: the disc tilted by TILT degrees (0.5)
 # about a level axis at K azimuths 360/K apart, as a specimen is never laid perfectly level; a
@@ -52,7 +58,7 @@ measure() {
            printf "%s %s %s\n", $1, $2, (low == "" ? "-" : sprintf("%.2f", 100 * low)) }'
 }
 
-MESHES=${MESHES:-disc_30cm_12mm.obj disc_30cm.obj disc_30cm_3mm.obj}
+MESHES=${MESHES:-disc_30cm_grid_12mm.obj disc_30cm_grid.obj disc_30cm_grid_3mm.obj}
 SPECIMENS=${SPECIMENS:-1}
 TILT=${TILT:-0.5}
 [[ "$SPECIMENS" =~ ^[1-9][0-9]*$ && "$TILT" =~ ^[0-9]+(\.[0-9]+)?$ ]] ||

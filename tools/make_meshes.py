@@ -5,7 +5,9 @@ triangles). box.obj: a unit cube centred on the origin, each face a 4x4 grid (19
 disc_30cm.obj: the Cusick drape test's specimen, a 30 cm disc in z = 0 of 25 concentric rings
 (ring k holds 6k vertices, 6 mm apart: 1,951 vertices, 3,750 triangles), the mesh a user brings;
 disc_30cm_12mm.obj and disc_30cm_3mm.obj the same disc of 12 rings 12.5 mm apart (469 vertices) and 50
-rings 3 mm apart (7,651 vertices), for bench/textile_runs.sh.
+rings 3 mm apart (7,651 vertices), for bench/textile_runs.sh; disc_30cm_grid_12mm.obj,
+disc_30cm_grid.obj and disc_30cm_grid_3mm.obj the disc cut from a square grid 12.5, 6.25 and
+3.125 mm apart (441, 1,793 and 7,213 vertices; grid_disc), for bench/textile_runs.sh.
 cusick_support.obj: an 18 cm disc support, a closed cylinder of radius 0.09 m and height 0.3 m
 standing on z = 0 (64 segments around). table.obj: a table, a top 1.2 x 0.8 x 0.04 m at 0.75 m and
 four legs 0.05 x 0.05 m under it, each a separate closed box of 4x4 quads a face (the table-like
@@ -97,6 +99,40 @@ def disc(radius, rings):
                 i += 1
     return vertices, faces
 
+def grid_disc(radius, spacing):
+    """A disc cut from a square grid (spacing apart, on the axes) as a fabric is cut from its
+    warp and weft: the grid's vertices inside the circle, each cell's two triangles where all
+    three corners are kept (diagonals mirrored between quadrants, so the disc is symmetric about
+    both axes), then the rim's vertices (those on an edge of one triangle) moved out along their
+    radius onto the circle. Inside the rim every triangle is a right triangle of the grid, whose
+    edge springs hold the fabric's tension and shear exactly (docs/materials.md)."""
+    n = int(math.ceil(radius / spacing)) + 1
+    index, vertices = {}, []
+    for j in range(-n, n + 1):
+        for i in range(-n, n + 1):
+            if math.hypot(i, j) * spacing <= radius * (1 + 1e-9):
+                index[i, j] = len(vertices)
+                vertices.append([i * spacing, j * spacing, 0.0])
+    faces = []
+    for j in range(-n, n):
+        for i in range(-n, n):
+            a, b, c, d = (i, j), (i + 1, j), (i + 1, j + 1), (i, j + 1)
+            cell = [(a, b, c), (a, c, d)] if (i >= 0) == (j >= 0) else [(a, b, d), (b, c, d)]
+            faces += [tuple(index[v] for v in t) for t in cell if all(v in index for v in t)]
+    uses = {}
+    for t in faces:
+        for k in range(3):
+            edge = tuple(sorted((t[k], t[(k + 1) % 3])))
+            uses[edge] = uses.get(edge, 0) + 1
+    for v in {v for edge, count in uses.items() if count == 1 for v in edge}:
+        x, y, _ = vertices[v]
+        r = math.hypot(x, y)
+        vertices[v][:2] = [x * radius / r, y * radius / r]
+    for a, b, c in faces:  # none folded over or flattened by the move
+        (ax, ay, _), (bx, by, _), (cx, cy, _) = vertices[a], vertices[b], vertices[c]
+        assert (bx - ax) * (cy - ay) - (by - ay) * (cx - ax) > 0.1 * spacing * spacing
+    return [tuple(v) for v in vertices], faces
+
 def cylinder(radius, height, segments, cap_rings):
     vertices, faces = [], []
     def ring(z, r):
@@ -148,6 +184,10 @@ if __name__ == "__main__":  # bench/user_scenes/make_meshes.py imports write
     write(os.path.join(here, "disc_30cm.obj"), *disc(0.15, 25), "30 cm disc, 25 rings 6 mm apart (tools/make_meshes.py)")
     write(os.path.join(here, "disc_30cm_12mm.obj"), *disc(0.15, 12), "30 cm disc, 12 rings 12.5 mm apart (tools/make_meshes.py)")
     write(os.path.join(here, "disc_30cm_3mm.obj"), *disc(0.15, 50), "30 cm disc, 50 rings 3 mm apart (tools/make_meshes.py)")
+    for name, spacing in (("disc_30cm_grid_12mm.obj", 0.0125), ("disc_30cm_grid.obj", 0.00625),
+                          ("disc_30cm_grid_3mm.obj", 0.003125)):
+        write(os.path.join(here, name), *grid_disc(0.15, spacing),
+              "30 cm disc cut from a square grid %g mm apart (tools/make_meshes.py)" % (spacing * 1000))
     write(os.path.join(here, "cusick_support.obj"), *cylinder(0.09, 0.3, 64, 4),
           "18 cm support: cylinder r 0.09 m, h 0.3 m on z = 0 (tools/make_meshes.py)")
     write(os.path.join(here, "table.obj"), *table(),
