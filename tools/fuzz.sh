@@ -14,8 +14,9 @@ if [ "${1:-}" = "--long" ]; then FUZZ_SECONDS=${FUZZ_SECONDS:-600}; fi
 bash tools/install-deps.sh
 BUILD_DIR=${BUILD_DIR:-build-fuzz}
 if [ -n "${FUZZ_SECONDS:-}" ]; then LIMIT="-max_total_time=$FUZZ_SECONDS"; else LIMIT="-runs=${FUZZ_RUNS:-100000} -seed=20261122"; fi
-# Line tables only, as in test-sanitized.sh: a crash's stack keeps its files and lines.
-FLAGS="-fsanitize=fuzzer-no-link,address,undefined -fno-sanitize-recover=all -O1 -gline-tables-only"
+# The Debug type's debug information is line tables only (CMAKE_CXX_FLAGS_DEBUG below), as in
+# test-sanitized.sh: a crash's stack keeps its files and lines.
+FLAGS="-fsanitize=fuzzer-no-link,address,undefined -fno-sanitize-recover=all -O1"
 # The CCD kernels for Highway's portable target alone: the fuzzers test the readers, and clang
 # 14 with the fuzzer's instrumentation and ASan took over 45 minutes of CPU on the kernels'
 # four instruction sets (kernels_batch.cpp alone), where GCC's sanitized build takes a minute.

@@ -5,11 +5,11 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 bash tools/install-deps.sh
 BUILD_DIR=${BUILD_DIR:-build-sanitized}
-# Line tables only (-g1, in place of the Debug type's -g): the reports keep their files and
-# lines, and GCC's variable tracking over the CCD kernels' four instruction sets, which took
-# kernels_batch.cpp alone over 20 minutes to compile, is not done (7.5 minutes with -g1, the
-# same as without debug information).
-FLAGS="-fsanitize=address,undefined -fno-sanitize-recover=all -fno-omit-frame-pointer -O1 -g1"
+# The Debug type's debug information is line tables only (CMAKE_CXX_FLAGS_DEBUG=-g1, in place
+# of -g): the reports keep their files and lines, and GCC's variable tracking over the CCD
+# kernels' four instruction sets, which took kernels_batch.cpp alone over 20 minutes to
+# compile, is not done (7.5 minutes with -g1, the same as without debug information).
+FLAGS="-fsanitize=address,undefined -fno-sanitize-recover=all -fno-omit-frame-pointer -O1"
 cmake -S . -B "$BUILD_DIR" -DCMAKE_BUILD_TYPE=Debug -DCMAKE_CXX_FLAGS_DEBUG=-g1 -DDRAPE_BUILD_BENCH=OFF \
   -DCMAKE_CXX_FLAGS="$FLAGS" -DCMAKE_EXE_LINKER_FLAGS="-fsanitize=address,undefined" \
   -DCMAKE_SHARED_LINKER_FLAGS="-fsanitize=address,undefined" >/dev/null
