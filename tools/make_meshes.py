@@ -7,7 +7,9 @@ disc_30cm.obj: the Cusick drape test's specimen, a 30 cm disc in z = 0 of 25 con
 disc_30cm_12mm.obj and disc_30cm_3mm.obj the same disc of 12 rings 12.5 mm apart (469 vertices) and 50
 rings 3 mm apart (7,651 vertices), for bench/textile_runs.sh; disc_30cm_grid_12mm.obj,
 disc_30cm_grid.obj and disc_30cm_grid_3mm.obj the disc cut from a square grid 12.5, 6.25 and
-3.125 mm apart (441, 1,793 and 7,213 vertices; grid_disc), for bench/textile_runs.sh.
+3.125 mm apart (441, 1,793 and 7,213 vertices; grid_disc), for bench/textile_runs.sh;
+disc_30cm_cells_12mm.obj, disc_30cm_cells.obj and disc_30cm_cells_3mm.obj the disc of whole half
+cells of those grids (489, 1,877 and 7,377 vertices; cell_disc), for bench/textile_runs.sh.
 cusick_support.obj: an 18 cm disc support, a closed cylinder of radius 0.09 m and height 0.3 m
 standing on z = 0 (64 segments around). table.obj: a table, a top 1.2 x 0.8 x 0.04 m at 0.75 m and
 four legs 0.05 x 0.05 m under it, each a separate closed box of 4x4 quads a face (the table-like
@@ -133,6 +135,53 @@ def grid_disc(radius, spacing):
         assert (bx - ax) * (cy - ay) - (by - ay) * (cx - ax) > 0.1 * spacing * spacing
     return [tuple(v) for v in vertices], faces
 
+def cell_disc(radius, spacing):
+    """A disc of whole half cells of a square grid (spacing apart, on the axes): the grid's
+    vertices within a cut radius, each cell's two triangles where all three corners are kept,
+    no vertex moved. Each cell's diagonal runs along the circles about the centre (from
+    (i + 1, j) to (i, j + 1) where the cell's centre has x y > 0, the other way elsewhere), so
+    the rim is a chain of the grid's edges and diagonals, within about half a cell of the
+    circle. The cut radius is the one (of 401 between radius - spacing and radius + spacing)
+    whose disc's area is nearest pi radius^2. Every triangle, the rim's too, is a right
+    triangle of the grid with its legs along the warp and weft, whose edge springs hold the
+    fabric's tension and shear exactly (docs/materials.md)."""
+    n = int(math.ceil(radius / spacing)) + 2
+    def cut_at(cut):
+        index, vertices = {}, []
+        for j in range(-n, n + 1):
+            for i in range(-n, n + 1):
+                if math.hypot(i, j) * spacing <= cut:
+                    index[i, j] = len(vertices)
+                    vertices.append((i * spacing, j * spacing, 0.0))
+        faces = []
+        for j in range(-n, n):
+            for i in range(-n, n):
+                a, b, c, d = (i, j), (i + 1, j), (i + 1, j + 1), (i, j + 1)
+                cell = [(a, b, d), (b, c, d)] if (2 * i + 1 > 0) == (2 * j + 1 > 0) else [(a, b, c), (a, c, d)]
+                faces += [tuple(index[v] for v in t) for t in cell if all(v in index for v in t)]
+        used = sorted({v for t in faces for v in t})  # no vertex left without a triangle
+        renumber = {v: k for k, v in enumerate(used)}
+        return [vertices[v] for v in used], [tuple(renumber[v] for v in t) for t in faces]
+    def area(mesh):
+        v, faces = mesh
+        return sum(0.5 * ((v[b][0] - v[a][0]) * (v[c][1] - v[a][1]) - (v[b][1] - v[a][1]) * (v[c][0] - v[a][0]))
+                   for a, b, c in faces)
+    goal = math.pi * radius * radius
+    vertices, faces = min((cut_at(radius + spacing * (k / 200 - 1)) for k in range(401)),
+                          key=lambda mesh: abs(area(mesh) - goal))
+    uses = {}
+    for t in faces:
+        for k in range(3):
+            edge = tuple(sorted((t[k], t[(k + 1) % 3])))
+            uses[edge] = uses.get(edge, 0) + 1
+    rim = {}
+    for edge, count in uses.items():
+        assert count <= 2
+        for v in edge if count == 1 else ():
+            rim[v] = rim.get(v, 0) + 1
+    assert all(count == 2 for count in rim.values()), "a rim vertex where two parts of the disc meet"
+    return vertices, faces
+
 def cylinder(radius, height, segments, cap_rings):
     vertices, faces = [], []
     def ring(z, r):
@@ -188,6 +237,10 @@ if __name__ == "__main__":  # bench/user_scenes/make_meshes.py imports write
                           ("disc_30cm_grid_3mm.obj", 0.003125)):
         write(os.path.join(here, name), *grid_disc(0.15, spacing),
               "30 cm disc cut from a square grid %g mm apart (tools/make_meshes.py)" % (spacing * 1000))
+    for name, spacing in (("disc_30cm_cells_12mm.obj", 0.0125), ("disc_30cm_cells.obj", 0.00625),
+                          ("disc_30cm_cells_3mm.obj", 0.003125)):
+        write(os.path.join(here, name), *cell_disc(0.15, spacing),
+              "30 cm disc of a square grid's half cells %g mm apart (tools/make_meshes.py)" % (spacing * 1000))
     write(os.path.join(here, "cusick_support.obj"), *cylinder(0.09, 0.3, 64, 4),
           "18 cm support: cylinder r 0.09 m, h 0.3 m on z = 0 (tools/make_meshes.py)")
     write(os.path.join(here, "table.obj"), *table(),

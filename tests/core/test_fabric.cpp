@@ -262,3 +262,31 @@ TEST(Fabric, TheCusickDiscCutFromAGridShearsAsTheFabricAndTheRingDiscDoesNot) {
   }
   for (const char* disc : {"disc_30cm_12mm.obj", "disc_30cm.obj", "disc_30cm_3mm.obj"}) EXPECT_GT(shears(disc), 40) << disc;
 }
+
+// The Cusick specimens of whole half cells (tools/make_meshes.py, cell_disc): the grid's right
+// triangles up to the rim, whose edges are the grid's edges and diagonals (no vertex moved), so
+// every triangle's springs hold the fabric exactly and the disc stores the fabric's shear and
+// tension at every resolution, where the disc with its rim moved onto the circle stores 5 to
+// 19 times the shear (the test above). Its area is the circle's to 0.4 %.
+TEST(Fabric, TheCusickDiscOfHalfCellsShearsAsTheFabricAtEveryResolution) {
+  const Scalar T = 4030, G = 19.2, e = 1e-4;  // white-dots-on-blk
+  const Scalar s = 0.5 * (T + std::sqrt(T * T + 4 * G * G)), nu = G / s;
+  Eigen::Matrix<Scalar, 2, 2> shear, along_x, along_y;
+  shear << 1, e, 0, 1;
+  along_x << 1 + e, 0, 0, 1 - nu * e;
+  along_y << 1 - nu * e, 0, 0, 1 + e;
+  for (const char* disc : {"disc_30cm_cells_12mm.obj", "disc_30cm_cells.obj", "disc_30cm_cells_3mm.obj"}) {
+    const Model model = model_of(R"({"gravity": [0, 0, 0], "cloths": [{"mesh": ")" DRAPE_SOURCE_DIR "/scenes/meshes/" +
+                                 std::string(disc) + R"(", "material": {"tensile_stiffness": 4030, "shear_stiffness": 19.2}}]})");
+    const Scalar area = surface_area(model.cloth_mesh(model.initial_positions));
+    const Scalar sheared = strain_energy(model, shear) / (0.5 * G * e * e * area);
+    const Scalar x = strain_energy(model, along_x) / (0.5 * T * e * e * area);
+    const Scalar y = strain_energy(model, along_y) / (0.5 * T * e * e * area);
+    std::printf("%s: shear %.5f G, stretch along x %.5f T, along y %.5f T, area %.5f of the circle's\n", disc, sheared, x, y,
+                area / (M_PI * 0.15 * 0.15));
+    EXPECT_NEAR(sheared, 1, 1e-3) << disc;
+    EXPECT_NEAR(x, 1, 1e-3) << disc;
+    EXPECT_NEAR(y, 1, 1e-3) << disc;
+    EXPECT_NEAR(area / (M_PI * 0.15 * 0.15), 1, 0.004) << disc;
+  }
+}
