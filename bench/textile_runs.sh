@@ -27,6 +27,9 @@
 # limp fabric's single run can land on one of several fold patterns (docs/benchmarks.md), so
 # the table then gives the specimens' mean coefficient, its spread (largest - smallest) and
 # their nodes, and the changes of the means (about K times as long).
+# FRAMES=N runs each Cusick specimen N frames (the scene's 60, 2 s, by default) and measures it
+# at frame N and at 2N/3: a coefficient that moved by more than 0.01 between them is marked
+# unsettled (a fold can still deepen after 2 s: docs/benchmarks.md, session 31).
 set -uo pipefail
 cd "$(dirname "$0")/.."
 ROOT=$(pwd)
@@ -38,8 +41,9 @@ mkdir -p "$OUT"
 failed=0
 
 # A shipped scene ($1) with another preset ($2) and its meshes' paths made absolute; for the
-# Cusick scene, the disc's mesh is $3 and, given $4, the disc is tilted by TILT degrees about a
-# level axis at azimuth $4 degrees (the scene's cloth transform must be the one matched here).
+# Cusick scene, the disc's mesh is $3, given $4, the disc is tilted by TILT degrees about a
+# level axis at azimuth $4 degrees (the scene's cloth transform must be the one matched here),
+# and given $5, the run is $5 frames long.
 scene_with() {
   local tilt=""
   if [ -n "${4:-}" ]; then
@@ -47,6 +51,7 @@ scene_with() {
   fi
   sed -E -e "s/\"preset\": \"[a-z0-9-]+\"/\"preset\": \"$2\"${COMPRESSION:+, \"compression\": $COMPRESSION}/" -e "s|meshes/disc_30cm\.obj|meshes/${3:-disc_30cm.obj}|" \
     -e "s|\"transform\": \{\"translate\": \[0, 0, 0.305\]\}|\"transform\": {$tilt\"translate\": [0, 0, 0.305]}|" \
+    -e "${5:+s|^  \"frames\": [0-9]+,|  \"frames\": $5,|}" \
     -e "s|\"mesh\": \"meshes/|\"mesh\": \"$ROOT/scenes/meshes/|" "scenes/$1.json"
 }
 
@@ -59,12 +64,21 @@ measure() {
            printf "%s %s %s\n", $1, $2, (low == "" ? "-" : sprintf("%.2f", 100 * low)) }'
 }
 
+UNSETTLED=0.01  # a coefficient that moved by more from the earlier frame is still moving
+
+# ", unsettled" where a run's coefficients at the last and the earlier frame ($1, $2) differ
+# by more than UNSETTLED.
+unsettled() { awk -v a="$1" -v b="$2" -v u="$UNSETTLED" 'BEGIN { d = a - b; if (d < 0) d = -d; if (d > u) printf ", unsettled" }'; }
+
 MESHES=${MESHES:-disc_30cm_grid_12mm.obj disc_30cm_grid.obj disc_30cm_grid_3mm.obj}
 SPECIMENS=${SPECIMENS:-1}
 TILT=${TILT:-0.5}
+FRAMES=${FRAMES:-60}
+[[ "$FRAMES" =~ ^[1-9][0-9]*$ && "$FRAMES" -ge 3 ]] || { echo "textile_runs.sh: expected FRAMES of 3 or more" >&2; exit 2; }
+EARLIER=$((FRAMES * 2 / 3))
 [[ "$SPECIMENS" =~ ^[1-9][0-9]*$ && "$TILT" =~ ^[0-9]+(\.[0-9]+)?$ ]] ||
   { echo "textile_runs.sh: expected SPECIMENS of 1 or more and TILT in degrees (a number)" >&2; exit 2; }
-cusick_heading="DC (at frame 40) nodes (the shallowest node's depth), seconds"
+cusick_heading="DC at frame $FRAMES (at frame $EARLIER; 'unsettled' where they differ by over $UNSETTLED) nodes (the shallowest node's depth), seconds"
 [ "$SPECIMENS" -gt 1 ] && cusick_heading="$SPECIMENS specimens tilted $TILT degrees: mean DC, spread, nodes, seconds"
 printf "%-19s | %s | %-8s | %-6s | %-11s | %s\n" preset "Cusick per mesh ($MESHES; compression ${COMPRESSION:-1}): $cusick_heading" \
   "DC changes" "pen" "cantilever" "published DC, nodes"
@@ -82,7 +96,7 @@ for preset in $PRESETS; do
         run+="-specimen$k"
         azimuth=$(awk -v k="$k" -v n="$SPECIMENS" 'BEGIN { printf "%g", 360 * k / n }')
       fi
-      scene_with cusick_drape "$preset" "$mesh" "$azimuth" > "$run.json"
+      scene_with cusick_drape "$preset" "$mesh" "$azimuth" "$FRAMES" > "$run.json"
       if [ -n "$azimuth" ] && ! grep -q '"rotate"' "$run.json"; then
         echo "textile_runs.sh: scenes/cusick_drape.json's cloth transform is not the one this script tilts" >&2
         exit 2
@@ -92,8 +106,8 @@ for preset in $PRESETS; do
         failed=1
         continue
       fi
-      read -r dc nodes shallowest < <(measure "$run" 60)
-      read -r dc40 _ _ < <(measure "$run" 40)
+      read -r dc nodes shallowest < <(measure "$run" "$FRAMES")
+      read -r dc40 _ _ < <(measure "$run" "$EARLIER")
       if ! [[ "$dc" =~ ^-?[0-9.]+$ && "$dc40" =~ ^-?[0-9.]+$ && "$nodes" =~ ^[0-9]+$ ]]; then
         echo "$preset on $mesh: drape measure cusick failed" >&2
         failed=1
@@ -108,13 +122,14 @@ for preset in $PRESETS; do
       last+=("")
     elif [ "$SPECIMENS" -eq 1 ]; then
       read -r dc dc40 nodes shallowest <<< "${values[0]}"
-      cells+=("$(printf "%.3f (%.3f) %d (shallowest %s cm), %s s" "$dc" "$dc40" "$nodes" "$shallowest" "$seconds")")
+      cells+=("$(printf "%.3f (%.3f%s) %d (shallowest %s cm), %s s" "$dc" "$dc40" "$(unsettled "$dc" "$dc40")" "$nodes" "$shallowest" "$seconds")")
       last+=("$dc")
     else
       mean=$(printf "%s\n" "${values[@]}" | awk '{ s += $1 } END { printf "%.4f", s / NR }')
-      cells+=("$(printf "%s\n" "${values[@]}" | awk -v t="$seconds" '
-        { s += $1; lo = (NR == 1 || $1 < lo) ? $1 : lo; hi = (NR == 1 || $1 > hi) ? $1 : hi; n = n (NR > 1 ? "/" : "") $3 }
-        END { printf "%.3f spread %.3f nodes %s, %s s", s / NR, hi - lo, n, t }')")
+      cells+=("$(printf "%s\n" "${values[@]}" | awk -v t="$seconds" -v u="$UNSETTLED" '
+        { s += $1; lo = (NR == 1 || $1 < lo) ? $1 : lo; hi = (NR == 1 || $1 > hi) ? $1 : hi; n = n (NR > 1 ? "/" : "") $3
+          d = $1 - $2; if (d < 0) d = -d; if (d > u) u_n++ }
+        END { printf "%.3f spread %.3f nodes %s%s, %s s", s / NR, hi - lo, n, (u_n ? sprintf(", %d unsettled", u_n) : ""), t }')")
       last+=("$mean")
     fi
   done
