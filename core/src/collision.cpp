@@ -34,8 +34,9 @@ void CollisionCounters::add(const CollisionCounters& o) {
 std::string thickness_note(const Model& model) {
   if (!model.scene.collisions.self) return {};
   Scalar shortest = std::numeric_limits<Scalar>::infinity();
-  for (const Spring& s : model.springs)
-    if (s.kind == SpringKind::Stretch) shortest = std::min(shortest, s.rest_length);
+  for (const Triangle& t : model.triangles)  // the cloths' edges at rest
+    for (int k = 0; k < 3; ++k)
+      shortest = std::min(shortest, (model.initial_positions[std::size_t(t[k])] - model.initial_positions[std::size_t(t[(k + 1) % 3])]).norm());
   const Scalar thickness = model.scene.collisions.thickness;
   if (!(REST_FRACTION * shortest < thickness)) return {};
   char text[512];

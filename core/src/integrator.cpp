@@ -56,7 +56,7 @@ Integrator::Integrator(const Model& model, int threads)
 void Integrator::build_pattern(const std::vector<std::pair<int, int>>& extra) {
   const Model& model = model_;
   Workspace& w = *work_;
-  // The blocks of each block column: the springs' and hinges' (found once), and the extra
+  // The blocks of each block column: the springs', hinges' and membranes' (found once), and the extra
   // pairs' both ways; then the scalar pattern written directly, three rows of each block in
   // each of its three columns (a triplet list of nine entries a block took 6 % of a folding
   // cloth's step when the pattern changed every step).
@@ -73,6 +73,12 @@ void Integrator::build_pattern(const std::vector<std::pair<int, int>>& extra) {
         for (std::size_t j = 0; j < 4; ++j) {
           const int a = w.free_index[std::size_t(hinge.v[i])], b = w.free_index[std::size_t(hinge.v[j])];
           if (a >= 0 && b >= 0 && hinge.k[i] != 0 && hinge.k[j] != 0) join(a, b);
+        }
+    for (const Membrane& membrane : model.membranes)
+      for (std::size_t i = 0; i < 3; ++i)
+        for (std::size_t j = 0; j < 3; ++j) {
+          const int a = w.free_index[std::size_t(membrane.v[i])], b = w.free_index[std::size_t(membrane.v[j])];
+          if (a >= 0 && b >= 0) join(a, b);
         }
     for (auto& column : w.base_columns) {
       std::sort(column.begin(), column.end());
@@ -116,6 +122,13 @@ void Integrator::build_pattern(const std::vector<std::pair<int, int>>& extra) {
       for (std::size_t j = 0; j < 4; ++j) {
         const int a = w.free_index[model.hinges[k].v[i]], b = w.free_index[model.hinges[k].v[j]];
         if (a >= 0 && b >= 0 && model.hinges[k].k[i] != 0 && model.hinges[k].k[j] != 0) w.hinge_blocks[k][i][j] = w.block(a, b);
+      }
+  w.membrane_blocks.resize(model.membranes.size());
+  for (std::size_t k = 0; k < model.membranes.size(); ++k)
+    for (std::size_t i = 0; i < 3; ++i)
+      for (std::size_t j = 0; j < 3; ++j) {
+        const int a = w.free_index[std::size_t(model.membranes[k].v[i])], b = w.free_index[std::size_t(model.membranes[k].v[j])];
+        w.membrane_blocks[k][i][j] = a >= 0 && b >= 0 ? w.block(a, b) : std::array<int, 3>{-1, -1, -1};
       }
   w.extra_blocks = extra;
 }
@@ -578,6 +591,7 @@ Scalar potential_energy(const Model& model, const State& state) {
     e += 0.5 * spring_constant(s.stiffness, stretch, s.compression) * stretch * stretch;
   }
   for (const Hinge& hinge : model.hinges) e += 0.5 * hinge_vector(hinge, state.positions).squaredNorm();
+  for (const Membrane& membrane : model.membranes) e += membrane_energy(membrane.material, corners(membrane, state.positions));
   for (std::size_t v = 0; v < state.positions.size(); ++v) e -= model.masses[v] * model.scene.gravity.dot(state.positions[v]);
   return e;
 }
@@ -587,6 +601,12 @@ Scalar max_stretch(const Model& model, const State& state) {
   for (const Spring& s : model.springs)
     if (s.kind == SpringKind::Stretch)
       worst = std::max(worst, (state.positions[s.i] - state.positions[s.j]).norm() / s.rest_length);
+  for (const Membrane& membrane : model.membranes)  // its edges (shared ones twice), against the rest shape's
+    for (std::size_t k = 0; k < 3; ++k) {
+      const std::size_t a = std::size_t(membrane.v[k]), b = std::size_t(membrane.v[(k + 1) % 3]);
+      worst = std::max(worst, (state.positions[a] - state.positions[b]).norm() /
+                                  (model.initial_positions[a] - model.initial_positions[b]).norm());
+    }
   return worst;
 }
 

@@ -84,6 +84,24 @@ void Integrator::assemble(const std::vector<Vec3>& x, const std::vector<Vec3>& v
       }
     }
   }
+  // The membrane's triangles (evaluate_membrane): A's (i, j) block -h dF_i/dv_j - h^2 dF_i/dx_j.
+  for (std::size_t k = 0; k < m.membranes.size(); ++k) {
+    const Membrane& membrane = m.membranes[k];
+    const std::array<Vec3, 3> xs = corners(membrane, x), vs = corners(membrane, v);
+    const MembraneEvaluation e = evaluate_membrane(membrane.material, xs, vs);
+    for (std::size_t i = 0; i < 3; ++i) {
+      const std::size_t vi = std::size_t(membrane.v[i]);
+      forces[vi] += e.force[i];
+      if (stiffness_times_v)
+        for (std::size_t j = 0; j < 3; ++j) (*stiffness_times_v)[vi] += e.d_force_d_x[i][j] * vs[j];
+      if (w.free_index[vi] < 0) continue;
+      for (std::size_t j = 0; j < 3; ++j) {
+        const Mat3 block = -h * e.d_force_d_v[i][j] - h * h * e.d_force_d_x[i][j];
+        if (w.free_index[std::size_t(membrane.v[j])] >= 0) w.add_block(w.membrane_blocks[k][i][j], block);
+        else if (coupling) (*coupling)[vi] += block * (*pinned_dv)[std::size_t(membrane.v[j])];
+      }
+    }
+  }
 }
 
 bool Integrator::solve_linearised(State& state, const std::vector<Vec3>& pinned_dv, StepReport& report) {

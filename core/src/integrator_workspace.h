@@ -89,6 +89,7 @@ struct Integrator::Workspace {
   };
   std::vector<SpringBlocks> spring_blocks;
   std::vector<std::array<std::array<std::array<int, 3>, 4>, 4>> hinge_blocks;  // [hinge][i][j]: block (v_i, v_j)
+  std::vector<std::array<std::array<std::array<int, 3>, 3>, 3>> membrane_blocks;  // [triangle][i][j]: block (v_i, v_j)
   VectorX rhs, solution;
   std::vector<Vec3> forces;
   // The projective step's start velocities and explicit forces (gravity, wind), kept for the
@@ -101,7 +102,7 @@ struct Integrator::Workspace {
   using ContactBlocks = std::array<std::array<std::array<int, 3>, 4>, 4>;
   std::vector<ContactBlocks> contact_blocks;  // [contact][i][j]: block (vertex i, vertex j)
   std::vector<std::pair<int, int>> extra_blocks;  // free vertex pairs (a < b) the pattern joins for self contacts, sorted
-  std::vector<std::vector<int>> base_columns;     // per block column b, the rows a of the springs' and hinges' blocks, sorted
+  std::vector<std::vector<int>> base_columns;     // per block column b, the rows a of the springs', hinges' and membranes' blocks, sorted
   std::vector<Scalar> contact_holds, contact_impulses;
   std::vector<char> contact_held;  // per contact: neither released nor found pulling in the solve
   std::vector<Scalar> assembled;   // the matrix's values before the contacts' penalties and friction

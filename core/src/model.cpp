@@ -158,6 +158,15 @@ std::array<Scalar, 3> fit_triangle_springs(const std::array<Eigen::Matrix<Scalar
   return weights;
 }
 
+// The warp and weft laid into a triangle's plane (normal n): the warp's part in the plane and
+// the normal across it (the weft's part where the triangle faces the warp).
+std::pair<Vec3, Vec3> fabric_axes(const Vec3& n, const Vec3& warp, const Vec3& weft) {
+  Vec3 u = warp - warp.dot(n) * n;
+  if (u.norm() < 0.5) u = weft - weft.dot(n) * n;
+  u.normalize();
+  return {u, n.cross(u)};
+}
+
 // The edge springs of a fabric's tensile stiffness T and shear stiffness G on a triangle mesh:
 // each triangle's share fitted (fit_triangle_springs) with the warp the cloth's local x axis
 // (warp, after its transform) laid into the triangle's plane (its y axis where the triangle
@@ -171,11 +180,7 @@ void add_fabric_mesh_springs(Model& model, const TriangleMesh& mesh, int offset,
     const auto x = [&](int k) -> const Vec3& { return model.initial_positions[std::size_t(t[std::size_t(k)] + offset)]; };
     const Vec3 normal = (x(1) - x(0)).cross(x(2) - x(0));
     const Scalar area = 0.5 * normal.norm();
-    const Vec3 n = normal.normalized();
-    Vec3 u = warp - warp.dot(n) * n;
-    if (u.norm() < 0.5) u = weft - weft.dot(n) * n;  // the triangle faces the warp
-    u.normalize();
-    const Vec3 v = n.cross(u);
+    const auto [u, v] = fabric_axes(normal.normalized(), warp, weft);
     std::array<Eigen::Matrix<Scalar, 2, 1>, 3> directions;
     std::array<Scalar, 3> lengths{};
     for (int k = 0; k < 3; ++k) {
@@ -190,6 +195,32 @@ void add_fabric_mesh_springs(Model& model, const TriangleMesh& mesh, int offset,
   }
   const std::vector<Edge> edges = mesh_edges(mesh);
   add_edge_springs(model, edges, offset, m.damping, SpringKind::Stretch, [&](std::size_t e, Scalar) { return constant[edges[e]]; });
+}
+
+// The membrane of a fabric's tensile stiffness T and shear stiffness G on a triangle mesh
+// (Material::membrane_triangles): each triangle a constant strain element in the warp and weft
+// laid into its plane (fabric_axes), with the stiffness of the grid's sheet
+// (add_fabric_grid_springs): c11 = c22 = axial, c12 = c66 = G, so that a strip free to narrow
+// stretches by T and the two models agree wherever the springs are exact.
+void add_membranes(Model& model, const TriangleMesh& mesh, int offset, const Material& m, const Vec3& warp, const Vec3& weft) {
+  const Scalar T = m.tensile_stiffness, G = m.shear_stiffness;
+  const Scalar axial = 0.5 * (T + std::hypot(T, 2 * G));
+  for (const Triangle& t : mesh.triangles) {
+    Membrane membrane;
+    for (std::size_t k = 0; k < 3; ++k) membrane.v[k] = t[k] + offset;
+    const auto x = [&](std::size_t k) -> const Vec3& { return model.initial_positions[std::size_t(membrane.v[k])]; };
+    const Vec3 normal = (x(1) - x(0)).cross(x(2) - x(0));
+    const auto [u, v] = fabric_axes(normal.normalized(), warp, weft);
+    Mat2 edges;
+    edges << (x(1) - x(0)).dot(u), (x(2) - x(0)).dot(u), (x(1) - x(0)).dot(v), (x(2) - x(0)).dot(v);
+    MembraneMaterial& mm = membrane.material;
+    mm.rest_inverse = edges.inverse();
+    mm.area = 0.5 * normal.norm();
+    mm.c11 = mm.c22 = axial;
+    mm.c12 = mm.c66 = G;
+    mm.damping = m.damping;
+    model.membranes.push_back(membrane);
+  }
 }
 
 // A hinge weight below this share of the hinge's largest is a right angle's zero (a
@@ -385,6 +416,10 @@ Model build_model(const Scene& scene) {
       fail(scene, path + "/material/compression",
            "the projective solver's springs resist compression as they resist stretching; expected the cholmod or "
            "cg solver for a 'compression' below 1");
+    if (spec.material.membrane_triangles && scene.solver.kind == SolverKind::Projective)
+      fail(scene, path + "/material/membrane",
+           "the projective solver takes springs and hinges, not the membrane's triangles; expected the cholmod or cg "
+           "solver for 'membrane' 'triangles', or 'springs'");
     std::optional<GridMesh> grid;
     TriangleMesh mesh;
     if (spec.grid) {
@@ -426,7 +461,11 @@ Model build_model(const Scene& scene) {
       }
       add_springs(model, springs.bend, offset, bend_springs, m.damping, SpringKind::Bend);
     } else {
-      if (fabric && m.shear_stiffness > 0) {
+      if (fabric && m.membrane_triangles) {
+        const Vec3 origin = spec.transform.apply(Vec3::Zero());
+        add_membranes(model, mesh, offset, m, (spec.transform.apply(Vec3::UnitX()) - origin).normalized(),
+                      (spec.transform.apply(Vec3::UnitY()) - origin).normalized());
+      } else if (fabric && m.shear_stiffness > 0) {
         const Vec3 origin = spec.transform.apply(Vec3::Zero());
         add_fabric_mesh_springs(model, mesh, offset, m, (spec.transform.apply(Vec3::UnitX()) - origin).normalized(),
                                 (spec.transform.apply(Vec3::UnitY()) - origin).normalized());

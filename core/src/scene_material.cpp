@@ -7,7 +7,7 @@ namespace drape::scene_json {
 void read_material(const Node& m, bool grid, Material& material) {
   m.allow({"preset", "density", "mass_per_area", "stretch", "tensile_stiffness", "shear", "shear_stiffness", "bend",
            "bending_rigidity", "damping", "air_damping", "strain_limit", "shear_locking_angle",
-           "compression"});
+           "compression", "membrane"});
   // A preset is a measured fabric in the fabric's keys (fabrics.h); keys beside it override it.
   const MeasuredFabric* preset = m.has("preset") ? find_measured_fabric(m.at("preset").string()) : nullptr;
   if (m.has("preset") && !preset)
@@ -56,6 +56,24 @@ void read_material(const Node& m, bool grid, Material& material) {
     material.shear_locking_angle = angle.up_to(MAX_SHEAR_LOCKING_ANGLE, "degrees");
   }
   if (m.has("compression")) material.compression = m.at("compression").number_in(0, 1, "from 0 to 1");
+  if (m.has("membrane")) {
+    const Node node = m.at("membrane");
+    const std::string kind = node.string();
+    if (kind != "springs" && kind != "triangles")
+      node.fail("expected 'springs' (edge springs fitted to each triangle) or 'triangles' (constant strain elements)");
+    material.membrane_triangles = kind == "triangles";
+    if (material.membrane_triangles) {
+      if (grid)
+        node.fail("a grid's springs hold the fabric's tension and shear exactly; expected 'triangles' on a mesh cloth only");
+      if (!(material.tensile_stiffness > 0 && material.shear_stiffness > 0))
+        node.fail("expected a fabric's 'tensile_stiffness' and 'shear_stiffness' (N/m, or a 'preset') for the triangles");
+      if (material.strain_limit > 0)
+        m.at("strain_limit").fail("the strain limit holds edge springs; expected no 'strain_limit' with 'membrane' 'triangles'");
+      if (material.compression < 1)
+        m.at("compression").fail("the triangles resist compression as stretching; expected no 'compression' with "
+                                 "'membrane' 'triangles'");
+    }
+  }
 }
 
 }  // namespace drape::scene_json

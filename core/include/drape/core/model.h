@@ -65,6 +65,18 @@ inline Vec3 hinge_force(const Hinge& hinge, std::size_t i, const std::vector<Vec
   return -hinge.k[i] * hinge_pull(hinge, x, v);
 }
 
+/// One triangle of a mesh cloth's membrane (Material::membrane_triangles): its corners (global
+/// vertex indices) and its constant strain element (evaluate_membrane).
+struct Membrane {
+  std::array<int, 3> v{};
+  MembraneMaterial material;
+};
+
+/// A membrane triangle's corners at positions x.
+inline std::array<Vec3, 3> corners(const Membrane& membrane, const std::vector<Vec3>& x) {
+  return {x[std::size_t(membrane.v[0])], x[std::size_t(membrane.v[1])], x[std::size_t(membrane.v[2])]};
+}
+
 /// The vertices and triangles of one cloth within the global arrays.
 struct ClothRange {
   int first_vertex = 0, vertex_count = 0;
@@ -92,6 +104,7 @@ struct Model {
   std::vector<ClothRange> cloths;
   std::vector<Spring> springs;          ///< only kinds with nonzero stiffness
   std::vector<Hinge> hinges;            ///< cloths with a bending rigidity only
+  std::vector<Membrane> membranes;      ///< mesh cloths with "membrane": "triangles" only
   std::vector<Pin> pins;
   std::vector<int> pin_of_vertex;       ///< index into pins, or -1 for a free vertex
   std::vector<Obstacle> obstacles;

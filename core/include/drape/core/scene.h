@@ -118,6 +118,12 @@ struct Material {
   /// and knitted fabrics barely resist in-plane compression (they buckle at the yarns' scale),
   /// where a linear spring (1) resists it as it resists stretching. The cholmod and cg solvers.
   Scalar compression = 1;
+  /// How a mesh cloth's fabric (tensile_stiffness and shear_stiffness) holds its plane: false
+  /// ("membrane": "springs"), edge springs fitted triangle by triangle, which hold the fabric's
+  /// shear on right triangles along the warp and weft and shear several times too stiffly on
+  /// other shapes; true ("triangles"), each triangle a constant strain element
+  /// (MembraneMaterial), exact on every shape. The cholmod and cg solvers.
+  bool membrane_triangles = false;
 };
 
 struct ClothSpec {
