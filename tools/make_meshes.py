@@ -9,7 +9,10 @@ rings 3 mm apart (7,651 vertices), for bench/textile_runs.sh; disc_30cm_grid_12m
 disc_30cm_grid.obj and disc_30cm_grid_3mm.obj the disc cut from a square grid 12.5, 6.25 and
 3.125 mm apart (441, 1,793 and 7,213 vertices; grid_disc), for bench/textile_runs.sh;
 disc_30cm_cells_12mm.obj, disc_30cm_cells.obj and disc_30cm_cells_3mm.obj the disc of whole half
-cells of those grids (489, 1,877 and 7,377 vertices; cell_disc), for bench/textile_runs.sh.
+cells of those grids (489, 1,877 and 7,377 vertices; cell_disc), for bench/textile_runs.sh, and
+disc_30cm_cells_12mm_turned30.obj and disc_30cm_cells_turned30.obj the first two turned by 30
+degrees about their axis (a cloth's warp is its x axis: their edges no longer follow it; the
+membrane's locking in docs/materials.md).
 cusick_support.obj: an 18 cm disc support, a closed cylinder of radius 0.09 m and height 0.3 m
 standing on z = 0 (64 segments around). table.obj: a table, a top 1.2 x 0.8 x 0.04 m at 0.75 m and
 four legs 0.05 x 0.05 m under it, each a separate closed box of 4x4 quads a face (the table-like
@@ -241,6 +244,11 @@ if __name__ == "__main__":  # bench/user_scenes/make_meshes.py imports write
                           ("disc_30cm_cells_3mm.obj", 0.003125)):
         write(os.path.join(here, name), *cell_disc(0.15, spacing),
               "30 cm disc of a square grid's half cells %g mm apart (tools/make_meshes.py)" % (spacing * 1000))
+    for name, spacing in (("disc_30cm_cells_12mm_turned30.obj", 0.0125), ("disc_30cm_cells_turned30.obj", 0.00625)):
+        vertices, faces = cell_disc(0.15, spacing)
+        c, s = math.cos(math.radians(30)), math.sin(math.radians(30))
+        write(os.path.join(here, name), [(c * x - s * y, s * x + c * y, z) for x, y, z in vertices], faces,
+              "30 cm disc of a square grid's half cells %g mm apart turned 30 degrees (tools/make_meshes.py)" % (spacing * 1000))
     write(os.path.join(here, "cusick_support.obj"), *cylinder(0.09, 0.3, 64, 4),
           "18 cm support: cylinder r 0.09 m, h 0.3 m on z = 0 (tools/make_meshes.py)")
     write(os.path.join(here, "table.obj"), *table(),
