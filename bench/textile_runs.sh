@@ -24,6 +24,8 @@
 # every run's material that `compression` (docs/materials.md; default: the presets' linear springs),
 # MEMBRANE=triangles to give it constant strain triangles in place of the fitted edge springs
 # (`membrane`, docs/materials.md; the cantilever's grid keeps its springs),
+# THICKNESS=M (metres) for the Cusick runs' collision thickness in place of the scene's default
+# 5 mm (a knit folding tightly meets itself inside 5 mm: docs/benchmarks.md, session 31),
 # SPECIMENS=K for K specimens a resolution in place of one: the disc tilted by TILT degrees (0.5)
 # about a level axis at K azimuths 360/K apart, as a specimen is never laid perfectly level; a
 # limp fabric's single run can land on one of several fold patterns (docs/benchmarks.md), so
@@ -47,13 +49,17 @@ failed=0
 # level axis at azimuth $4 degrees (the scene's cloth transform must be the one matched here),
 # and given $5, the run is $5 frames long.
 scene_with() {
-  local tilt=""
+  local tilt="" thickness=""
+  if [ -n "${THICKNESS:-}" ] && [ -n "${3:-}" ]; then
+    thickness='s|"collisions": \{"self": true, "obstacles": true\}|"collisions": {"self": true, "obstacles": true, "thickness": '"$THICKNESS"'}|'
+  fi
   if [ -n "${4:-}" ]; then
     tilt=$(awk -v t="$TILT" -v a="$4" 'BEGIN { r = a * atan2(0, -1) / 180; printf "\"rotate\": [%s, %.9f, %.9f, 0], ", t, cos(r), sin(r) }')
   fi
   sed -E -e "s/\"preset\": \"[a-z0-9-]+\"/\"preset\": \"$2\"${COMPRESSION:+, \"compression\": $COMPRESSION}${MEMBRANE:+${3:+, \"membrane\": \"$MEMBRANE\"}}/" -e "s|meshes/disc_30cm\.obj|meshes/${3:-disc_30cm.obj}|" \
     -e "s|\"transform\": \{\"translate\": \[0, 0, 0.305\]\}|\"transform\": {$tilt\"translate\": [0, 0, 0.305]}|" \
     -e "${5:+s|^  \"frames\": [0-9]+,|  \"frames\": $5,|}" \
+    -e "$thickness" \
     -e "s|\"mesh\": \"meshes/|\"mesh\": \"$ROOT/scenes/meshes/|" "scenes/$1.json"
 }
 
@@ -78,11 +84,13 @@ TILT=${TILT:-0.5}
 FRAMES=${FRAMES:-60}
 [[ "$FRAMES" =~ ^[1-9][0-9]*$ && "$FRAMES" -ge 3 ]] || { echo "textile_runs.sh: expected FRAMES of 3 or more" >&2; exit 2; }
 EARLIER=$((FRAMES * 2 / 3))
+[[ -z "${THICKNESS:-}" || "$THICKNESS" =~ ^[0-9]*\.?[0-9]+([eE]-?[0-9]+)?$ ]] ||
+  { echo "textile_runs.sh: expected THICKNESS in metres (a number)" >&2; exit 2; }
 [[ "$SPECIMENS" =~ ^[1-9][0-9]*$ && "$TILT" =~ ^[0-9]+(\.[0-9]+)?$ ]] ||
   { echo "textile_runs.sh: expected SPECIMENS of 1 or more and TILT in degrees (a number)" >&2; exit 2; }
 cusick_heading="DC at frame $FRAMES (at frame $EARLIER; 'unsettled' where they differ by over $UNSETTLED) nodes (the shallowest node's depth), seconds"
 [ "$SPECIMENS" -gt 1 ] && cusick_heading="$SPECIMENS specimens tilted $TILT degrees: mean DC, spread, nodes, seconds"
-printf "%-19s | %s | %-8s | %-6s | %-11s | %s\n" preset "Cusick per mesh ($MESHES; compression ${COMPRESSION:-1}; membrane ${MEMBRANE:-springs}): $cusick_heading" \
+printf "%-19s | %s | %-8s | %-6s | %-11s | %s\n" preset "Cusick per mesh ($MESHES; compression ${COMPRESSION:-1}; membrane ${MEMBRANE:-springs}; thickness ${THICKNESS:-default}): $cusick_heading" \
   "DC changes" "pen" "cantilever" "published DC, nodes"
 for preset in $PRESETS; do
   cells=()
