@@ -15,23 +15,14 @@
 #include "drape/core/integrator.h"
 #include "drape/core/mesh.h"
 #include "../temp_root.h"
+#include "sheet_strain.h"
 
 using namespace drape;
+using drape::testing::model_of;
+using drape::testing::sheet_strains;
+using drape::testing::strain_energy;
 
 namespace {
-
-Model model_of(const std::string& json) { return build_model(parse_scene(json, "inline.json")); }
-
-// The springs' energy of the model's rest positions mapped by x -> F x (in the cloth's plane;
-// the scenes here have no gravity and no bending, so it is all their potential energy).
-Scalar strain_energy(const Model& model, const Eigen::Matrix<Scalar, 2, 2>& map) {
-  State state = initial_state(model);
-  for (Vec3& x : state.positions) {
-    const Eigen::Matrix<Scalar, 2, 1> p = map * Eigen::Matrix<Scalar, 2, 1>(x.x(), x.y());
-    x = Vec3(p.x(), p.y(), x.z());
-  }
-  return potential_energy(model, state);
-}
 
 Model sheet(Scalar x, Scalar y, int n, int m, Scalar tensile, Scalar shear) {
   std::ostringstream json;
@@ -47,15 +38,11 @@ Model sheet(Scalar x, Scalar y, int n, int m, Scalar tensile, Scalar shear) {
 TEST(Fabric, AGridStoresTheSheetsEnergyUnderHomogeneousStrain) {
   // A 0.6 x 0.4 m sheet (square and oblong quads): a shear angle g stores G g^2 / 2 a square
   // metre, and a stretch e along either axis with the sheet's own narrowing (Poisson's ratio
-  // G / s, s below) T e^2 / 2, to 1e-4 at strains of 1e-4.
+  // G / s, sheet_strain.h) T e^2 / 2, to 1e-4 at strains of 1e-4.
   const Scalar T = 800, G = 60, e = 1e-4, area = 0.6 * 0.4;
-  const Scalar s = 0.5 * (T + std::sqrt(T * T + 4 * G * G)), nu = G / s;
   for (const auto& [n, m] : {std::pair{12, 8}, std::pair{24, 8}, std::pair{6, 8}}) {
     const Model model = sheet(0.6, 0.4, n, m, T, G);
-    Eigen::Matrix<Scalar, 2, 2> shear, along_x, along_y;
-    shear << 1, e, 0, 1;
-    along_x << 1 + e, 0, 0, 1 - nu * e;
-    along_y << 1 - nu * e, 0, 0, 1 + e;
+    const auto [shear, along_x, along_y] = sheet_strains(T, G, e);
     EXPECT_NEAR(strain_energy(model, shear) / (0.5 * G * e * e * area), 1, 1e-4) << n << " x " << m;
     EXPECT_NEAR(strain_energy(model, along_x) / (0.5 * T * e * e * area), 1, 1e-4) << n << " x " << m;
     EXPECT_NEAR(strain_energy(model, along_y) / (0.5 * T * e * e * area), 1, 1e-4) << n << " x " << m;
@@ -180,15 +167,11 @@ std::filesystem::path sheet_mesh(const std::string& name, Scalar w, Scalar h, in
 // 10 times this sheet's G, 79 times a polyester tablecloth's.
 TEST(Fabric, AGridExportedAsAMeshShearsAsTheFabric) {
   const Scalar T = 800, G = 30, e = 1e-4;
-  const Scalar s = 0.5 * (T + std::sqrt(T * T + 4 * G * G)), nu = G / s;
   const auto mesh = sheet_mesh("right.obj", 0.6, 0.4, 12, 8, 0);
   const Model model = model_of(R"({"gravity": [0, 0, 0], "cloths": [{"mesh": ")" + mesh.string() +
                                R"(", "material": {"tensile_stiffness": 800, "shear_stiffness": 30}}]})");
   const Scalar area = surface_area(model.cloth_mesh(model.initial_positions));
-  Eigen::Matrix<Scalar, 2, 2> shear, along_x, along_y;
-  shear << 1, e, 0, 1;
-  along_x << 1 + e, 0, 0, 1 - nu * e;
-  along_y << 1 - nu * e, 0, 0, 1 + e;
+  const auto [shear, along_x, along_y] = sheet_strains(T, G, e);
   EXPECT_NEAR(strain_energy(model, shear) / (0.5 * G * e * e * area), 1, 1e-4);
   EXPECT_NEAR(strain_energy(model, along_x) / (0.5 * T * e * e * area), 1, 1e-4);
   EXPECT_NEAR(strain_energy(model, along_y) / (0.5 * T * e * e * area), 1, 1e-4);
@@ -201,11 +184,7 @@ TEST(Fabric, AGridExportedAsAMeshShearsAsTheFabric) {
 // Gelder's, the model before the fit: the same mesh with the tensile stiffness alone).
 TEST(Fabric, AnIrregularMeshKeepsTheTensionAndShearsLessThanAnIsotropicOne) {
   const Scalar T = 4030, G = 19.2, e = 1e-4;  // white-dots-on-blk: a polyester tablecloth
-  const Scalar s = 0.5 * (T + std::sqrt(T * T + 4 * G * G)), nu = G / s;
-  Eigen::Matrix<Scalar, 2, 2> shear, along_x, along_y;
-  shear << 1, e, 0, 1;
-  along_x << 1 + e, 0, 0, 1 - nu * e;
-  along_y << 1 - nu * e, 0, 0, 1 + e;
+  const auto [shear, along_x, along_y] = sheet_strains(T, G, e);
   for (const Scalar jitter : {0.1, 0.4}) {
     const auto mesh = sheet_mesh("irregular.obj", 0.6, 0.4, 24, 16, jitter);
     const std::string cloth = R"({"gravity": [0, 0, 0], "cloths": [{"mesh": ")" + mesh.string() + R"(", "material": )";
@@ -235,10 +214,7 @@ TEST(Fabric, AnIrregularMeshKeepsTheTensionAndShearsLessThanAnIsotropicOne) {
 // drape on both (docs/benchmarks.md).
 TEST(Fabric, TheCusickDiscCutFromAGridShearsAsTheFabricAndTheRingDiscDoesNot) {
   const Scalar T = 4030, G = 19.2, e = 1e-4;  // white-dots-on-blk
-  const Scalar s = 0.5 * (T + std::sqrt(T * T + 4 * G * G)), nu = G / s;
-  Eigen::Matrix<Scalar, 2, 2> shear, along_x;
-  shear << 1, e, 0, 1;
-  along_x << 1 + e, 0, 0, 1 - nu * e;
+  const auto [shear, along_x, along_y] = sheet_strains(T, G, e);
   // The disc's shear in G, its tension checked on the way.
   const auto shears = [&](const std::string& disc) {
     const Model model = model_of(R"({"gravity": [0, 0, 0], "cloths": [{"mesh": ")" DRAPE_SOURCE_DIR "/scenes/meshes/" + disc +
@@ -270,11 +246,7 @@ TEST(Fabric, TheCusickDiscCutFromAGridShearsAsTheFabricAndTheRingDiscDoesNot) {
 // 19 times the shear (the test above). Its area is the circle's to 0.4 %.
 TEST(Fabric, TheCusickDiscOfHalfCellsShearsAsTheFabricAtEveryResolution) {
   const Scalar T = 4030, G = 19.2, e = 1e-4;  // white-dots-on-blk
-  const Scalar s = 0.5 * (T + std::sqrt(T * T + 4 * G * G)), nu = G / s;
-  Eigen::Matrix<Scalar, 2, 2> shear, along_x, along_y;
-  shear << 1, e, 0, 1;
-  along_x << 1 + e, 0, 0, 1 - nu * e;
-  along_y << 1 - nu * e, 0, 0, 1 + e;
+  const auto [shear, along_x, along_y] = sheet_strains(T, G, e);
   for (const char* disc : {"disc_30cm_cells_12mm.obj", "disc_30cm_cells.obj", "disc_30cm_cells_3mm.obj"}) {
     const Model model = model_of(R"({"gravity": [0, 0, 0], "cloths": [{"mesh": ")" DRAPE_SOURCE_DIR "/scenes/meshes/" +
                                  std::string(disc) + R"(", "material": {"tensile_stiffness": 4030, "shear_stiffness": 19.2}}]})");

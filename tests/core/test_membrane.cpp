@@ -14,8 +14,12 @@
 #include "drape/core/integrator.h"
 #include "drape/core/scene.h"
 #include "../temp_root.h"
+#include "sheet_strain.h"
 
 using namespace drape;
+using drape::testing::model_of;
+using drape::testing::sheet_strains;
+using drape::testing::strain_energy;
 
 namespace {
 
@@ -127,19 +131,6 @@ TEST(Membrane, DampingJacobianMatchesFiniteDifferences) {
 
 namespace {
 
-Model model_of(const std::string& json) { return build_model(parse_scene(json, "inline.json")); }
-
-// The model's potential energy with its rest positions mapped by x -> F x in its plane (no
-// gravity, no bending: the strain energy).
-Scalar strain_energy(const Model& model, const Eigen::Matrix<Scalar, 2, 2>& map) {
-  State state = initial_state(model);
-  for (Vec3& x : state.positions) {
-    const Eigen::Matrix<Scalar, 2, 1> p = map * Eigen::Matrix<Scalar, 2, 1>(x.x(), x.y());
-    x = Vec3(p.x(), p.y(), x.z());
-  }
-  return potential_energy(model, state);
-}
-
 Scalar surface(const Model& model) {
   Scalar a = 0;
   for (const Membrane& m : model.membranes) a += m.material.area;
@@ -153,11 +144,7 @@ Scalar surface(const Model& model) {
 // tension at every resolution, to the small strain's second order.
 TEST(Membrane, TheRingDiscsShearAndStretchAsTheFabric) {
   const Scalar T = 4030, G = 19.2, e = 1e-5;  // white-dots-on-blk
-  const Scalar s = 0.5 * (T + std::sqrt(T * T + 4 * G * G)), nu = G / s;
-  Eigen::Matrix<Scalar, 2, 2> shear, along_x, along_y;
-  shear << 1, e, 0, 1;
-  along_x << 1 + e, 0, 0, 1 - nu * e;
-  along_y << 1 - nu * e, 0, 0, 1 + e;
+  const auto [shear, along_x, along_y] = sheet_strains(T, G, e);
   for (const char* disc : {"disc_30cm_12mm.obj", "disc_30cm.obj", "disc_30cm_3mm.obj"}) {
     const Model model = model_of(R"({"gravity": [0, 0, 0], "cloths": [{"mesh": ")" DRAPE_SOURCE_DIR "/scenes/meshes/" +
                                  std::string(disc) +
