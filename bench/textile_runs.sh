@@ -25,7 +25,8 @@
 # MEMBRANE=triangles to give it constant strain triangles in place of the fitted edge springs
 # (`membrane`, docs/materials.md; the cantilever's grid keeps its springs),
 # THICKNESS=M (metres) for the Cusick runs' collision thickness in place of the scene's default
-# 5 mm (a knit folding tightly meets itself inside 5 mm: docs/benchmarks.md, session 31),
+# 5 mm, the cloth and its clamp moved to rest on the support at it (the coefficient follows the
+# thickness: docs/benchmarks.md, session 31),
 # SPECIMENS=K for K specimens a resolution in place of one: the disc tilted by TILT degrees (0.5)
 # about a level axis at K azimuths 360/K apart, as a specimen is never laid perfectly level; a
 # limp fabric's single run can land on one of several fold patterns (docs/benchmarks.md), so
@@ -51,7 +52,10 @@ failed=0
 scene_with() {
   local tilt="" thickness=""
   if [ -n "${THICKNESS:-}" ] && [ -n "${3:-}" ]; then
-    thickness='s|"collisions": \{"self": true, "obstacles": true\}|"collisions": {"self": true, "obstacles": true, "thickness": '"$THICKNESS"'}|'
+    # The cloth rests on the support (its top at 0.3 m) at the thickness: it and the clamp move.
+    local height
+    height=$(awk -v t="$THICKNESS" 'BEGIN { printf "%.9g", 0.3 + t }')
+    thickness='s|"collisions": \{"self": true, "obstacles": true\}|"collisions": {"self": true, "obstacles": true, "thickness": '"$THICKNESS"'}|;s|\[0, 0, 0\.305\]|[0, 0, '"$height"']|g'
   fi
   if [ -n "${4:-}" ]; then
     tilt=$(awk -v t="$TILT" -v a="$4" 'BEGIN { r = a * atan2(0, -1) / 180; printf "\"rotate\": [%s, %.9f, %.9f, 0], ", t, cos(r), sin(r) }')
