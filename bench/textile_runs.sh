@@ -7,8 +7,10 @@
 #   hold the fabric's tension and shear exactly but in the rim's band (docs/materials.md); the
 #   ring discs (disc_30cm_12mm.obj, 12 rings 12.5 mm apart, 469 vertices; disc_30cm.obj, the
 #   shipped scene's, 25 rings, 1,951; disc_30cm_3mm.obj, 50 rings, 7,651), near-equilateral
-#   triangles that shear near the isotropic sheet's 3 T / 8 whatever the fabric's shear, by
-#   MESHES (docs/benchmarks.md compares them).
+#   triangles that shear near the isotropic sheet's 3 T / 8 whatever the fabric's shear, and the
+#   discs of whole half cells (disc_30cm_cells_12mm.obj, disc_30cm_cells.obj,
+#   disc_30cm_cells_3mm.obj: every triangle exact, the rim within half a cell of the circle;
+#   *_turned30.obj turned against the warp), by MESHES (docs/benchmarks.md compares them).
 #   Each run in full (2 s) with the independent
 #   penetration check (--check): the drape coefficient and nodes at the last frame (and at
 #   frame 40, to show how settled it is; with the shallowest node's depth, to show a count that
