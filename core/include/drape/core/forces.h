@@ -40,7 +40,7 @@ inline Scalar spring_constant(Scalar stiffness, Scalar stretch, Scalar compressi
   return stretch < 0 ? stiffness * compression : stiffness;
 }
 
-/// One triangle of a fabric's membrane as a constant strain element (Material::membrane):
+/// One triangle of a fabric's membrane as a constant strain element (Material::membrane_triangles):
 /// orthotropic Saint Venant-Kirchhoff in the fabric's warp (1) and weft (2) directions, strain
 /// energy area / 2 (c11 E11^2 + c22 E22^2 + 2 c12 E11 E22 + 4 c66 E12^2) of the Green strain
 /// E = (F^T F - I) / 2, F = [x1 - x0, x2 - x0] rest_inverse the deformation gradient from the
