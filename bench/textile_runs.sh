@@ -13,7 +13,7 @@
 #   *_turned30.obj turned against the warp), by MESHES (docs/benchmarks.md compares them).
 #   Each run in full (2 s) with the independent
 #   penetration check (--check): the drape coefficient and nodes at the last frame (and at
-#   frame 40, to show how settled it is; with the shallowest node's depth, to show a count that
+#   frame 2N/3 of N, to show how settled it is; with the shallowest node's depth, to show a count that
 #   hangs on the 0.45 cm threshold), and the coefficient's change from each resolution to the
 #   next;
 # - the cantilever test (scenes/cantilever.json's strip) with each preset: measured / elastica.
@@ -90,8 +90,8 @@ TILT=${TILT:-0.5}
 FRAMES=${FRAMES:-60}
 [[ "$FRAMES" =~ ^[1-9][0-9]*$ && "$FRAMES" -ge 3 ]] || { echo "textile_runs.sh: expected FRAMES of 3 or more" >&2; exit 2; }
 EARLIER=$((FRAMES * 2 / 3))
-[[ -z "${THICKNESS:-}" || "$THICKNESS" =~ ^[0-9]*\.?[0-9]+([eE]-?[0-9]+)?$ ]] ||
-  { echo "textile_runs.sh: expected THICKNESS in metres (a number)" >&2; exit 2; }
+[[ -z "${THICKNESS:-}" || "$THICKNESS" =~ ^(0|[1-9][0-9]*)(\.[0-9]+)?([eE]-?[0-9]+)?$ ]] ||
+  { echo "textile_runs.sh: expected THICKNESS in metres (a JSON number such as 0.002)" >&2; exit 2; }
 [[ "$SPECIMENS" =~ ^[1-9][0-9]*$ && "$TILT" =~ ^[0-9]+(\.[0-9]+)?$ ]] ||
   { echo "textile_runs.sh: expected SPECIMENS of 1 or more and TILT in degrees (a number)" >&2; exit 2; }
 cusick_heading="DC at frame $FRAMES (at frame $EARLIER; 'unsettled' where they differ by over $UNSETTLED) nodes (the shallowest node's depth), seconds"
@@ -103,7 +103,7 @@ for preset in $PRESETS; do
   last=()
   pen=0
   for mesh in $MESHES; do
-    values=()  # "coefficient coefficient-at-40 nodes" of each specimen
+    values=()  # "coefficient coefficient-at-EARLIER nodes" of each specimen
     start=$(date +%s%N)
     for ((k = 0; k < SPECIMENS; ++k)); do
       run="$OUT/cusick-$preset-${mesh%.obj}"
