@@ -461,14 +461,14 @@ Model build_model(const Scene& scene) {
       }
       add_springs(model, springs.bend, offset, bend_springs, m.damping, SpringKind::Bend);
     } else {
+      // The fabric's warp and weft: the mesh's own x and y axes after the cloth's transform.
+      const Vec3 origin = spec.transform.apply(Vec3::Zero());
+      const Vec3 warp = (spec.transform.apply(Vec3::UnitX()) - origin).normalized();
+      const Vec3 weft = (spec.transform.apply(Vec3::UnitY()) - origin).normalized();
       if (fabric && m.membrane_triangles) {
-        const Vec3 origin = spec.transform.apply(Vec3::Zero());
-        add_membranes(model, mesh, offset, m, (spec.transform.apply(Vec3::UnitX()) - origin).normalized(),
-                      (spec.transform.apply(Vec3::UnitY()) - origin).normalized());
+        add_membranes(model, mesh, offset, m, warp, weft);
       } else if (fabric && m.shear_stiffness > 0) {
-        const Vec3 origin = spec.transform.apply(Vec3::Zero());
-        add_fabric_mesh_springs(model, mesh, offset, m, (spec.transform.apply(Vec3::UnitX()) - origin).normalized(),
-                                (spec.transform.apply(Vec3::UnitY()) - origin).normalized());
+        add_fabric_mesh_springs(model, mesh, offset, m, warp, weft);
       } else if (fabric) {
         add_isotropic_mesh_springs(model, mesh, offset, m);
       } else {
