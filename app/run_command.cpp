@@ -88,6 +88,16 @@ struct RunArguments {
   std::string resolution;
 };
 
+// The cloth's elastic elements as the summaries print them: its springs, and its membrane
+// triangles and bending hinges where it has them (a mesh cloth with "membrane": "triangles"
+// holds its fabric by triangles, not springs).
+std::string elements(const Model& model) {
+  std::string text = std::to_string(model.springs.size()) + " springs";
+  if (!model.membranes.empty()) text += ", " + std::to_string(model.membranes.size()) + " membrane triangles";
+  if (!model.hinges.empty()) text += ", " + std::to_string(model.hinges.size()) + " bending hinges";
+  return text;
+}
+
 // Loads and builds; prints the error and returns nullopt on bad input.
 std::optional<Model> load_model(const std::string& path, const char* command, const std::string& method = "") {
   try {
@@ -134,8 +144,8 @@ int run(const RunArguments& args) {
   settings.check_penetrations = args.check;
   settings.overwrite = args.overwrite;
   if (!args.quiet)
-    std::cerr << "drape run: " << args.scene << ": " << model->vertex_count() << " vertices, " << model->springs.size()
-              << " springs, " << settings.frames << " frames of " << scene.frame_steps << " steps; output in "
+    std::cerr << "drape run: " << args.scene << ": " << model->vertex_count() << " vertices, " << elements(*model)
+              << ", " << settings.frames << " frames of " << scene.frame_steps << " steps; output in "
               << settings.out.string() << "/\n";
 
   std::signal(SIGINT, on_interrupt);
@@ -216,7 +226,7 @@ Command add_validate_command(CLI::App& app) {
       return EXIT_BAD_INPUT;
     }
     std::cout << *scene << ": valid: " << model->cloths.size() << " cloth(s), " << model->vertex_count() << " vertices, "
-              << model->triangles.size() << " triangles, " << model->springs.size() << " springs, " << model->pins.size()
+              << model->triangles.size() << " triangles, " << elements(*model) << ", " << model->pins.size()
               << " pinned vertices, " << model->obstacles.size() << " obstacle(s); " << model->scene.frames
               << " frames of " << model->scene.frame_steps << " steps\n";
     return EXIT_OK;

@@ -88,6 +88,22 @@ TEST(RunCommand, ValidateAcceptsAndRejects) {
   EXPECT_EQ(run_drape("run " + SOURCE + "/scenes/flag.json --frames 0").status, 2);
 }
 
+// The summaries name what holds the cloth: a mesh cloth whose membrane is triangles has a
+// membrane triangle for each of its mesh's faces (and its bending hinges), not only springs.
+TEST(RunCommand, ValidateCountsAMembranesTriangles) {
+  const std::string mesh = SOURCE + "/scenes/meshes/disc_30cm_cells_12mm.obj";
+  std::ifstream obj(mesh);
+  int faces = 0;
+  for (std::string line; std::getline(obj, line);) faces += line.rfind("f ", 0) == 0;
+  ASSERT_GT(faces, 0);
+  const fs::path scene = write_scene("membrane", R"({"cloths": [{"mesh": ")" + mesh +
+                                                     R"(", "material": {"preset": "royal-target", "membrane": "triangles"}}]})");
+  const Outcome outcome = run_drape("validate " + scene.string());
+  EXPECT_EQ(outcome.status, 0) << outcome.output;
+  EXPECT_NE(outcome.output.find(", " + std::to_string(faces) + " membrane triangles, "), std::string::npos) << outcome.output;
+  EXPECT_NE(outcome.output.find(" bending hinges, "), std::string::npos) << outcome.output;
+}
+
 // A scene whose cloth starts through a mesh obstacle is bad input (core's
 // StartCheck.RefusesMeshesThatMeetAtTheStartAndNamesThem has the cases): validate and run say so,
 // naming the scene, and the run writes nothing.
