@@ -25,7 +25,8 @@
 # MESHES="disc_30cm_12mm.obj disc_30cm.obj disc_30cm_3mm.obj" for the ring discs, COMPRESSION=0.01 to give
 # every run's material that `compression` (docs/materials.md; default: the presets' linear springs),
 # MEMBRANE=triangles to give it constant strain triangles in place of the fitted edge springs
-# (`membrane`, docs/materials.md; the cantilever's grid keeps its springs),
+# (`membrane`, docs/materials.md; the cantilever's grid keeps its springs; not with COMPRESSION,
+# which the triangles do not model: refused),
 # THICKNESS=M (metres) for the Cusick runs' collision thickness in place of the scene's default
 # 5 mm, the cloth and its clamp moved to rest on the support at it (the coefficient follows the
 # thickness: docs/benchmarks.md, session 31),
@@ -92,6 +93,11 @@ FRAMES=${FRAMES:-60}
 EARLIER=$((FRAMES * 2 / 3))
 [[ -z "${THICKNESS:-}" || "$THICKNESS" =~ ^(0|[1-9][0-9]*)(\.[0-9]+)?([eE]-?[0-9]+)?$ ]] ||
   { echo "textile_runs.sh: expected THICKNESS in metres (a JSON number such as 0.002)" >&2; exit 2; }
+[[ -z "${MEMBRANE:-}" || "$MEMBRANE" == springs || "$MEMBRANE" == triangles ]] ||
+  { echo "textile_runs.sh: expected MEMBRANE springs or triangles" >&2; exit 2; }
+# The membrane's triangles have no compression model (drape refuses the two together).
+[[ -n "${COMPRESSION:-}" && "${MEMBRANE:-springs}" == triangles ]] &&
+  { echo "textile_runs.sh: COMPRESSION applies to springs only; MEMBRANE=triangles has no compression model (docs/materials.md)" >&2; exit 2; }
 [[ "$SPECIMENS" =~ ^[1-9][0-9]*$ && "$TILT" =~ ^[0-9]+(\.[0-9]+)?$ ]] ||
   { echo "textile_runs.sh: expected SPECIMENS of 1 or more and TILT in degrees (a number)" >&2; exit 2; }
 cusick_heading="DC at frame $FRAMES (at frame $EARLIER; 'unsettled' where they differ by over $UNSETTLED) nodes (the shallowest node's depth), seconds"
