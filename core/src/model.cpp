@@ -13,6 +13,7 @@
 #include <utility>
 
 #include "drape/core/mesh_io.h"
+#include "lattice_bending.h"
 
 namespace drape {
 namespace {
@@ -311,45 +312,6 @@ void add_hinges(Model& model, const TriangleMesh& mesh, int offset, Scalar rigid
   calibrate_hinges(model, first, rigidity);
 }
 
-// The bending of a grid of a x b cells for rigidity B (N m): the discrete Hessian of its
-// positions, as stencils of the hinges' form (Hinge). Every vertex between two others along
-// its row gets u = (x[i-1] - 2 x[i] + x[i+1]) sqrt(B A) / a^2, A its share of the cloth's area
-// (a b, half of it on the border), and likewise along its column; every cell gets its twist,
-// u = (x00 - x10 - x01 + x11) sqrt(2 B a b) / (a b). Their energy is B (x_uu^2 + x_vv^2 +
-// 2 x_uv^2) / 2 a square metre: B c^2 / 2 for a bend of curvature c in any direction, nothing
-// for an in-plane affine map, and stiffness against every pattern of vertices up and down. The
-// hinges of a grid's right triangles gave the checkerboard z = w (-1)^(i+j) 0.43 times the
-// energy of stripes of the same spacing, from their diagonals' hinges alone (docs/materials.md);
-// this gives it four times, as the continuum does. Its stencils join no pairs of vertices
-// beyond those the stretch, shear and bend springs join.
-void add_grid_bending(Model& model, const GridMesh& grid, int offset, Scalar rigidity, Scalar damping_time) {
-  if (!(rigidity > 0)) return;  // a scene pays only for what it asks for
-  const auto [a, b] = cell_sides(model, grid, offset);
-  const int n = grid.spec.resolution[0], m = grid.spec.resolution[1];
-  const auto at = [&](int i, int j) { return grid.index(i, j) + offset; };
-  const auto add = [&](std::array<int, 4> v, std::array<Scalar, 4> k) {
-    Hinge hinge;
-    hinge.v = v;
-    hinge.k = k;
-    hinge.damping = damping_time;
-    model.hinges.push_back(hinge);
-  };
-  // A second difference of step h about vertex c, whose area is A: the stencil's fourth corner unused.
-  const auto second_difference = [&](int before, int c, int after, Scalar h, Scalar area) {
-    const Scalar s = std::sqrt(rigidity * area) / (h * h);
-    add({before, c, after, c}, {s, -2 * s, s, 0});
-  };
-  const auto border = [](int k, int last) { return k == 0 || k == last ? 0.5 : 1.0; };  // a border vertex's share
-  for (int j = 0; j <= m; ++j)
-    for (int i = 1; i < n; ++i) second_difference(at(i - 1, j), at(i, j), at(i + 1, j), a, a * b * border(j, m));
-  for (int i = 0; i <= n; ++i)
-    for (int j = 1; j < m; ++j) second_difference(at(i, j - 1), at(i, j), at(i, j + 1), b, a * b * border(i, n));
-  const Scalar twist = std::sqrt(2 * rigidity * a * b) / (a * b);
-  for (int j = 0; j < m; ++j)
-    for (int i = 0; i < n; ++i)
-      add({at(i, j), at(i + 1, j), at(i, j + 1), at(i + 1, j + 1)}, {twist, -twist, -twist, twist});
-}
-
 // Memory a run of a scene needs, measured on drape_sphere.json at 64 x 64 and 128 x 128 quads
 // with self-collision on (peak resident 103 MiB and 257 MiB): about 12.4 KiB a vertex, most
 // of it the solver's factor, over a fixed part; rounded up. Fill-in grows faster than the
@@ -486,7 +448,15 @@ Model build_model(const Scene& scene) {
       if (model.springs[k].kind == SpringKind::Shear) model.springs[k].limit = diagonal_limit;
       model.springs[k].compression = m.compression;
     }
-    if (grid) add_grid_bending(model, *grid, offset, m.bending_rigidity, m.damping);
+    // A grid, or a mesh laid out on one, bends by the grid's discrete Hessian (lattice_bending.h):
+    // the hinges of right triangles bend half as stiffly along the cells' sides as along their
+    // diagonals (docs/materials.md). Other meshes by their hinges.
+    if (grid) {
+      const auto [a, b] = cell_sides(model, *grid, offset);
+      add_lattice_bending(model, grid_lattice(*grid, offset, a, b), m.bending_rigidity, m.damping);
+    }
+    else if (const auto lattice = m.bending_rigidity > 0 ? mesh_lattice(model, mesh, offset) : std::nullopt)
+      add_lattice_bending(model, *lattice, m.bending_rigidity, m.damping);
     else add_hinges(model, mesh, offset, m.bending_rigidity, m.damping);
     model.cloths.push_back(range);
   }
