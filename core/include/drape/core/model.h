@@ -34,8 +34,9 @@ struct Spring {
 /// and the corners opposite it (v[2], v[3]), the weights k from the rest triangles' cotangents
 /// times sqrt(B / (A1 + A2)) (B the bending rigidity, A1 and A2 their areas), calibrated to the
 /// triangles' shapes so that a cloth bent into a cylinder of curvature c stores B c^2 / 2 a
-/// square metre (model.cpp, calibrate_hinges). On a grid, a second difference along a row or a
-/// column or a cell's twist (model.cpp, add_grid_bending); a three-point stencil repeats a
+/// square metre (model.cpp, calibrate_hinges). On a grid, or a mesh laid out on a grid's
+/// lattice, a second difference along a row or a column or a cell's twist (lattice_bending.cpp,
+/// add_lattice_bending); a three-point stencil repeats a
 /// corner with weight 0. u is zero for every rigid motion and every affine image of the rest
 /// shape (uniform stretch, compression or shear in its plane): the model resists bending, not
 /// in-plane compression. The force on x_i is -k_i (u + damping du/dt); both are linear in the
