@@ -244,6 +244,14 @@ void write_run_inputs(const RunInputs& inputs, const std::filesystem::path& out)
 RunOutcome run_simulation(const Model& model, const RunSettings& settings, const std::atomic<bool>& interrupt,
                           const std::function<void(const FrameStats&)>& on_frame) {
   const std::optional<RunInputs> inputs = read_run_inputs(model.scene);
+  // The run writes its scene's copy as the folder's scene.json: a run's own copy may be run
+  // again into its folder (its statistics say it is one), a scene of the user's may not be
+  // replaced by it.
+  if (std::error_code error; !model.scene.file.empty() &&
+                             std::filesystem::equivalent(model.scene.file, settings.out / "scene.json", error) &&
+                             !std::filesystem::exists(settings.out / "stats.csv", error))
+    throw RunSetupError(model.scene.file.string() + ": the scene is the output folder's scene.json, which the run " +
+                        "writes (its copy of the scene); give another --out");
   prepare_run_folder(settings.out, settings.overwrite);
   // A failed write from here on (a full disk) stops the run: status 3, as during it.
   std::optional<LineFile> stats;

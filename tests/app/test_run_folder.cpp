@@ -75,6 +75,20 @@ TEST(RunFolder, OverwriteRemovesOnlyWhatARunWrote) {
   EXPECT_TRUE(fs::exists(again / "meshes/obstacle_0.obj"));
   const Outcome check = run_drape("check " + again.string());
   EXPECT_EQ(check.status, 0) << check.output;
+
+  // A scene of the user's own named scene.json, run into its folder: refused, with or
+  // without --overwrite, and left as it was (the run's copy would have replaced it).
+  const fs::path mine = temp_dir("users_scene");
+  fs::create_directories(mine);
+  fs::copy_file(SOURCE + "/scenes/hanging.json", mine / "scene.json");
+  const auto bytes = fs::file_size(mine / "scene.json");
+  for (const std::string flag : {"", " --overwrite"}) {
+    const Outcome refused = run_drape("run " + (mine / "scene.json").string() + " --frames 1 --quiet --out " + mine.string() + flag);
+    EXPECT_EQ(refused.status, 2) << refused.output;
+    EXPECT_NE(refused.output.find("the scene is the output folder's scene.json"), std::string::npos) << refused.output;
+    EXPECT_EQ(fs::file_size(mine / "scene.json"), bytes);
+    EXPECT_FALSE(fs::exists(mine / "stats.csv"));
+  }
 }
 
 // check and render read the scene and its meshes from the folder: the original files may move.
