@@ -136,6 +136,11 @@ int run(const RunArguments& args) {
     std::cerr << "drape run: --resolution: expected WIDTHxHEIGHT from 16x16 to 8192x8192, found '" << args.resolution << "'\n";
     return EXIT_BAD_INPUT;
   }
+  if (!args.resolution.empty() && !args.render && !wants_render) {
+    std::cerr << "drape run: --resolution sets the rendered frames' size; expected --render beside it (or the scene's "
+                 "render.enabled)\n";
+    return EXIT_BAD_INPUT;
+  }
   RunSettings settings;
   settings.out = args.out.empty() ? scene.output.folder : std::filesystem::path(args.out);
   settings.frames = args.frames > 0 ? args.frames : scene.frames;
@@ -194,7 +199,9 @@ Command add_run_command(CLI::App& app) {
       "  drape run scenes/flag.json --frames 10 --out /tmp/flag --quiet");
   cmd->add_option("scene", args->scene, "Scene file (JSON; see docs/scenes.md)")->required()->check(CLI::ExistingFile);
   cmd->add_option("--frames", args->frames, "Frames to simulate (default: the scene's)")->check(CLI::Range(1, 10000000));
-  cmd->add_option("--out", args->out, "Output folder (default: the scene's output.folder)");
+  cmd->add_option("--out", args->out, "Output folder (default: the scene's output.folder)")
+      ->check(CLI::Validator([](std::string& path) { return path.empty() ? std::string("expected a folder's path, not an empty string") : std::string(); },
+                             "PATH"));
   cmd->add_flag("-q,--quiet", args->quiet, "Print nothing but errors");
   cmd->add_option("-j,--threads", args->threads, "Threads for the collision narrow phase and the projective solver (results do not depend on it)")
       ->check(CLI::Range(1, 256))

@@ -4,6 +4,8 @@
 
 #include "scene_node.h"
 
+#include <algorithm>
+#include <initializer_list>
 #include <cmath>
 #include <fstream>
 #include <nlohmann/json.hpp>
@@ -246,9 +248,17 @@ Scene parse_scene(const std::string& text, const std::filesystem::path& file) {
   if (n.has("frames") && n.has("end_time")) n.fail("give 'frames' or 'end_time', not both");
   if (n.has("frames")) s.frames = n.at("frames").integer_in(1, MAX_FRAMES);
   if (n.has("end_time")) {
-    const Scalar frames = std::ceil(n.at("end_time").positive() / s.frame_time - 1e-9);
+    const Scalar end = n.at("end_time").positive(), frames = std::round(end / s.frame_time);
     if (!(frames <= MAX_FRAMES)) n.at("end_time").fail("expected at most " + std::to_string(MAX_FRAMES) + " frames (end_time / frame_time)");
-    s.frames = std::max(1, int(frames));
+    // A whole number of frames: a run ends on a frame, so another end would be moved silently.
+    if (!(frames >= 1 && std::abs(end / s.frame_time - frames) <= 1e-6 * frames)) {
+      std::ostringstream what;
+      what.precision(10);
+      what << "expected a whole number of frames of " << s.frame_time << " s (frame_time); " << end << " s is "
+           << end / s.frame_time << " frames: give 'frames', or an end_time such as " << std::max(Scalar(1), frames) * s.frame_time;
+      n.at("end_time").fail(what.str());
+    }
+    s.frames = int(frames);
   }
   if (n.has("gravity")) s.gravity = n.at("gravity").vec3_within(MAX_ACCELERATION, "m/s^2");
   for (const Node& c : n.at("cloths").array(1)) s.cloths.push_back(read_cloth(c));
@@ -285,6 +295,23 @@ Scene parse_scene(const std::string& text, const std::filesystem::path& file) {
     if (v.has("release_solves")) s.solver.release_solves = v.at("release_solves").integer_in(0, MAX_RELEASE_SOLVES);
     if (v.has("history")) s.solver.history = v.at("history").integer_in(0, MAX_PROJECTIVE_HISTORY);
     if (v.has("chebyshev")) s.solver.chebyshev = v.at("chebyshev").number_in(0, MAX_CHEBYSHEV_RHO, "from 0 to 0.9999");
+    // A key of another solver type is refused, not ignored: the user meant it to do something.
+    const std::string type = v.has("type") ? v.at("type").string() : "cholmod";
+    const auto only_for = [&](const char* key, std::initializer_list<SolverKind> kinds, const std::string& which) {
+      if (v.has(key) && std::find(kinds.begin(), kinds.end(), s.solver.kind) == kinds.end())
+        v.at(key).fail("applies to the " + which + " solver only, and this scene's 'type' is " + type);
+    };
+    only_for("tolerance", {SolverKind::ConjugateGradient, SolverKind::Projective}, "cg or projective");
+    only_for("max_iterations", {SolverKind::ConjugateGradient}, "cg");
+    only_for("factor_reuse", {SolverKind::Cholmod}, "cholmod");
+    only_for("release_solves", {SolverKind::Cholmod}, "cholmod");
+    for (const char* key : {"iterations", "history", "chebyshev"}) only_for(key, {SolverKind::Projective}, "projective");
+    if (v.has("tolerance") && s.solver.kind == SolverKind::Projective && s.solver.history == 0)
+      v.at("tolerance").fail("applies to L-BFGS (a 'history' above 0) only; local-global iterations ('history': 0) "
+                             "run every one of their 'iterations'");
+    if (v.has("chebyshev") && s.solver.history > 0)
+      v.at("chebyshev").fail("applies to local-global iterations ('history': 0) only; L-BFGS (history " +
+                             std::to_string(s.solver.history) + ") has no acceleration to set");
   }
   if (n.has("collisions")) {
     const Node c = n.at("collisions");
@@ -305,6 +332,7 @@ Scene parse_scene(const std::string& text, const std::filesystem::path& file) {
     const Node o = n.at("output");
     o.allow({"folder", "mesh_format", "meshes"});
     if (o.has("folder")) s.output.folder = o.at("folder").string();
+    if (o.has("folder") && s.output.folder.empty()) o.at("folder").fail("expected a folder's path, not an empty string");
     if (o.has("mesh_format")) s.output.mesh_format = o.at("mesh_format").one_of({"obj", "ply", "plyb", "stl", "stlb", "glb2", "collada"});
     if (o.has("meshes")) s.output.meshes = o.at("meshes").boolean();
   }

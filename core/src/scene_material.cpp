@@ -37,6 +37,10 @@ void read_material(const Node& m, bool grid, Material& material) {
   if (m.has("shear_stiffness")) material.shear_stiffness = m.at("shear_stiffness").up_to(MAX_STIFFNESS, "N/m");
   if (fabric) material.bend = 0;  // bending, if any, from the rigidity
   if (m.has("stretch")) material.stretch = m.at("stretch").up_to(MAX_STIFFNESS, "N", true);
+  if (m.has("shear") && !grid)
+    m.at("shear").fail("a mesh cloth's springs are its edges ('stretch') and the pairs across them ('bend'): it has no "
+                       "shear springs; expected no 'shear' on a mesh cloth (or the fabric's 'tensile_stiffness' and "
+                       "'shear_stiffness', N/m, to which its edge springs are fitted)");
   if (m.has("shear")) material.shear = m.at("shear").up_to(MAX_STIFFNESS, "N", true);
   if (m.has("bend")) material.bend = m.at("bend").up_to(MAX_STIFFNESS, "N", true);
   if (m.has("bending_rigidity"))  // no bending: `bend` 0

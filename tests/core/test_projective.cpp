@@ -41,7 +41,7 @@ TEST(Projective, FreeFallIsBackwardEulerExactly) {
   // after n steps of h, v = n h g and z = h^2 g n (n + 1) / 2, as backward Euler gives (to
   // rounding: v is a difference of positions over h).
   const Model model = model_of(R"({"frame_time": 0.01, "frame_steps": 2, "cloths": [{"grid": {"resolution": [6, 6]},
-    "material": {"air_damping": 0}}], "solver": {"type": "projective", "iterations": 3, "history": 0, "tolerance": 1e-12, "chebyshev": 0}})");
+    "material": {"air_damping": 0}}], "solver": {"type": "projective", "iterations": 3, "history": 0, "chebyshev": 0}})");
   const int n = 40;
   const State state = run(model, n);
   const Scalar h = model.scene.timestep(), g = model.scene.gravity.z();
@@ -57,12 +57,12 @@ TEST(Projective, MoreIterationsComeCloserToTheLinearisedReference) {
   // (their difference shrinks with the step); a few iterations leave the springs soft. Plain
   // local-global iterations (history 0), with and without Chebyshev acceleration.
   const State reference = run(hanging(R"({"type": "cholmod"})"), 25);
-  const Scalar few = largest_distance(reference, run(hanging(R"({"type": "projective", "iterations": 3, "history": 0, "tolerance": 1e-12, "chebyshev": 0})"), 25));
+  const Scalar few = largest_distance(reference, run(hanging(R"({"type": "projective", "iterations": 3, "history": 0, "chebyshev": 0})"), 25));
   const Scalar many =
-      largest_distance(reference, run(hanging(R"({"type": "projective", "iterations": 300, "history": 0, "tolerance": 1e-12, "chebyshev": 0})"), 25));
-  const Scalar plain = largest_distance(reference, run(hanging(R"({"type": "projective", "iterations": 10, "history": 0, "tolerance": 1e-12, "chebyshev": 0})"), 25));
+      largest_distance(reference, run(hanging(R"({"type": "projective", "iterations": 300, "history": 0, "chebyshev": 0})"), 25));
+  const Scalar plain = largest_distance(reference, run(hanging(R"({"type": "projective", "iterations": 10, "history": 0, "chebyshev": 0})"), 25));
   const Scalar accelerated =
-      largest_distance(reference, run(hanging(R"({"type": "projective", "iterations": 10, "history": 0, "tolerance": 1e-12, "chebyshev": 0.9})"), 25));
+      largest_distance(reference, run(hanging(R"({"type": "projective", "iterations": 10, "history": 0, "chebyshev": 0.9})"), 25));
   EXPECT_LT(many, 0.2 * few) << few << " m with 3 iterations, " << many << " m with 300";
   EXPECT_LT(accelerated, plain) << "10 iterations: " << plain << " m plain, " << accelerated << " m accelerated";
 }
@@ -96,9 +96,9 @@ TEST(Projective, QuasiNewtonConvergesFasterThanLocalGlobal) {
     const std::string count = std::to_string(iterations);
     const Scalar quasi_newton = objective_after_one_step(R"({"type": "projective", "tolerance": 1e-12, "iterations": )" + count + "}").first;
     const Scalar accelerated = objective_after_one_step(
-        R"({"type": "projective", "history": 0, "tolerance": 1e-12, "iterations": )" + count + "}").first;
+        R"({"type": "projective", "history": 0, "iterations": )" + count + "}").first;
     const Scalar plain = objective_after_one_step(
-        R"({"type": "projective", "history": 0, "tolerance": 1e-12, "chebyshev": 0, "iterations": )" + count + "}").first;
+        R"({"type": "projective", "history": 0, "chebyshev": 0, "iterations": )" + count + "}").first;
     EXPECT_LT(quasi_newton, accelerated) << iterations << " iterations";
     EXPECT_LT(quasi_newton, plain) << iterations << " iterations";
   }
