@@ -188,6 +188,68 @@ TriangleMesh load_mesh(const std::filesystem::path& path) {
   return mesh_of(importer, scene, path.string());
 }
 
+void number_as_in_file(TriangleMesh& mesh, const std::filesystem::path& path) {
+  if (lower_extension(path) != ".obj") return;
+  std::string bytes;
+  try {
+    bytes = ccd::read_input_file(path, ccd::MAX_MESH_BYTES, "mesh file");
+  } catch (const ccd::InputFileError& e) {
+    throw MeshFileError(e.what());
+  }
+  using Key = std::array<float, 3>;
+  std::map<Key, int> vertex_at;
+  for (std::size_t v = 0; v < mesh.vertices.size(); ++v)
+    vertex_at.emplace(Key{float(mesh.vertices[v].x()), float(mesh.vertices[v].y()), float(mesh.vertices[v].z())}, int(v));
+  // The mesh's vertex at a position read from the file: the same floats, or one unit in the
+  // last place away in each coordinate (assimp's parser and strtod may round apart).
+  const auto find = [&](const Key& p) {
+    if (const auto it = vertex_at.find(p); it != vertex_at.end()) return it->second;
+    for (int dx = -1; dx <= 1; ++dx)
+      for (int dy = -1; dy <= 1; ++dy)
+        for (int dz = -1; dz <= 1; ++dz) {
+          Key q = p;
+          const int d[3] = {dx, dy, dz};
+          for (int k = 0; k < 3; ++k)
+            if (d[k] != 0) q[std::size_t(k)] = std::nextafter(p[std::size_t(k)], d[k] > 0 ? INFINITY : -INFINITY);
+          if (const auto it = vertex_at.find(q); it != vertex_at.end()) return it->second;
+        }
+    return -1;
+  };
+  std::vector<int> from_file, order;  // file vertex -> mesh vertex; the mesh's vertices in the file's order
+  std::vector<char> placed(mesh.vertices.size(), 0);
+  for (std::size_t at = 0; at < bytes.size();) {
+    const std::size_t end = std::min(bytes.find('\n', at), bytes.size());
+    const std::string_view line(bytes.data() + at, end - at);
+    at = end + 1;
+    if (line.size() < 2 || line[0] != 'v' || (line[1] != ' ' && line[1] != '\t')) continue;
+    const std::string text(line.substr(2));
+    const char* p = text.c_str();
+    Key key{};
+    for (float& c : key) {
+      char* next = nullptr;
+      c = float(std::strtod(p, &next));
+      if (next == p) return;  // not three numbers: leave the numbering as it is
+      p = next;
+    }
+    const int v = find(key);
+    from_file.push_back(v);
+    if (v >= 0 && !placed[std::size_t(v)]) placed[std::size_t(v)] = 1, order.push_back(v);
+  }
+  if (order.size() != mesh.vertices.size()) return;  // a vertex the file's lines do not give: keep the numbering
+  std::vector<int> renumbered(mesh.vertices.size());
+  TriangleMesh out;
+  for (std::size_t k = 0; k < order.size(); ++k) {
+    renumbered[std::size_t(order[k])] = int(k);
+    out.vertices.push_back(mesh.vertices[std::size_t(order[k])]);
+  }
+  for (const Triangle& t : mesh.triangles)
+    out.triangles.push_back({renumbered[std::size_t(t[0])], renumbered[std::size_t(t[1])], renumbered[std::size_t(t[2])]});
+  for (int& v : from_file)
+    if (v >= 0) v = renumbered[std::size_t(v)];
+  out.from_file = std::move(from_file);
+  mesh = std::move(out);
+}
+
 TriangleMesh parse_mesh(const std::string& bytes, const std::string& format, const std::string& name) {
   if (format == "ply" || looks_like_ply(bytes)) check_ply(bytes, name);
   Assimp::Importer importer;

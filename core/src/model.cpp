@@ -389,8 +389,16 @@ Model build_model(const Scene& scene) {
       mesh = grid->mesh;
     } else {
       mesh = read_mesh(scene, spec.mesh_file, path + "/mesh");
+      // The cloth's vertices in the file's order: its frames list them so, and a handle's
+      // nodes name them so.
+      try {
+        number_as_in_file(mesh, spec.mesh_file);
+      } catch (const MeshFileError& e) {
+        fail(scene, path + "/mesh", e.what());
+      }
     }
     ClothRange range;
+    range.from_file = mesh.from_file;
     range.first_vertex = int(model.initial_positions.size());
     range.vertex_count = int(mesh.vertices.size());
     range.first_triangle = int(model.triangles.size());
@@ -486,11 +494,19 @@ Model build_model(const Scene& scene) {
     const ClothRange& range = model.cloths[handle.cloth];
     std::vector<int> chosen;
     for (std::size_t k = 0; k < handle.nodes.size(); ++k) {
-      if (handle.nodes[k] >= range.vertex_count)
-        fail(scene, path + "/nodes/" + std::to_string(k),
-             "vertex " + std::to_string(handle.nodes[k]) + " does not exist: cloth " + std::to_string(handle.cloth) +
-                 " has " + std::to_string(range.vertex_count) + " vertices");
-      chosen.push_back(range.first_vertex + handle.nodes[k]);
+      const int node = handle.nodes[k];
+      const std::string at = path + "/nodes/" + std::to_string(k);
+      // A mesh read from an OBJ file: the file's vertex numbering (from 0), which may count
+      // vertices no triangle uses.
+      const int count = range.from_file.empty() ? range.vertex_count : int(range.from_file.size());
+      if (node >= count)
+        fail(scene, at, "vertex " + std::to_string(node) + " does not exist: cloth " + std::to_string(handle.cloth) + " has " +
+                            std::to_string(count) + " vertices");
+      const int vertex = range.from_file.empty() ? node : range.from_file[std::size_t(node)];
+      if (vertex < 0)
+        fail(scene, at, "vertex " + std::to_string(node) + " of cloth " + std::to_string(handle.cloth) +
+                            "'s mesh file is used by no triangle, so it is not part of the cloth; expected a vertex of a triangle");
+      chosen.push_back(range.first_vertex + vertex);
     }
     if (!handle.corners.empty()) {
       const auto& cloth = scene.cloths[handle.cloth];

@@ -8,6 +8,7 @@
 #include "drape/core/mesh_io.h"
 #include "drape/core/model.h"
 #include "drape/core/run.h"
+#include "drape/core/scene.h"
 #include "../temp_root.h"
 
 using namespace drape;
@@ -28,6 +29,49 @@ TEST(MeshIo, RoundTripsObjAndPly) {
     EXPECT_EQ(mesh_problem(back), "") << format;
   }
   EXPECT_FALSE(fs::exists(dir / "grid.mtl"));  // OBJ without a material file
+}
+
+// An OBJ cloth keeps the file's vertex order (assimp's reader numbers vertices as the faces
+// first use them): its frames list the vertices as the file does, a handle's nodes name the
+// file's vertices, and a vertex no triangle uses is left out and refused as a node.
+TEST(MeshIo, AnObjClothKeepsTheFilesVertexOrder) {
+  const fs::path dir = drape::testing::temp_root("mesh_order");
+  fs::create_directories(dir);
+  {
+    // Vertex 0 unused; the faces use 4 and 3 before 1 and 2; vertex 5 repeats vertex 1's position.
+    std::ofstream obj(dir / "square.obj");
+    obj << "v 5 5 5\nv 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nv 0 0 0\nf 5 4 2\nf 4 3 6\n";
+  }
+  TriangleMesh mesh = load_mesh(dir / "square.obj");
+  ASSERT_EQ(mesh.vertices.size(), 4u);
+  EXPECT_EQ(mesh.vertices[0], Vec3(0, 1, 0));  // as the faces first use them
+  number_as_in_file(mesh, dir / "square.obj");
+  ASSERT_EQ(mesh.vertices.size(), 4u);
+  EXPECT_EQ(mesh.vertices[0], Vec3(0, 0, 0));
+  EXPECT_EQ(mesh.vertices[1], Vec3(1, 0, 0));
+  EXPECT_EQ(mesh.vertices[2], Vec3(1, 1, 0));
+  EXPECT_EQ(mesh.vertices[3], Vec3(0, 1, 0));
+  EXPECT_EQ(mesh.from_file, (std::vector<int>{-1, 0, 1, 2, 3, 0}));
+  EXPECT_EQ(mesh.triangles, (std::vector<Triangle>{{3, 2, 0}, {2, 1, 0}}));
+  EXPECT_EQ(mesh_problem(mesh), "");
+
+  const auto scene = [&](int node) {
+    return parse_scene(R"({"cloths": [{"mesh": ")" + (dir / "square.obj").string() + R"("}], "handles": [{"nodes": [)" +
+                           std::to_string(node) + "]}]}",
+                       "inline.json");
+  };
+  const Model model = build_model(scene(3));
+  ASSERT_EQ(model.pins.size(), 1u);
+  EXPECT_EQ(model.initial_positions[std::size_t(model.pins[0].vertex)], Vec3(1, 1, 0));  // the file's vertex 3
+  try {
+    build_model(scene(0));
+    FAIL();
+  } catch (const SceneError& e) {
+    EXPECT_NE(std::string(e.what()).find("/handles/0/nodes/0: vertex 0 of cloth 0's mesh file is used by no triangle"),
+              std::string::npos)
+        << e.what();
+  }
+  EXPECT_THROW(build_model(scene(6)), SceneError);  // the file has 6 vertices
 }
 
 TEST(MeshIo, ErrorsNameTheFile) {

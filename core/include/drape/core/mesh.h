@@ -19,6 +19,9 @@ using Edge = std::array<int, 2>;  ///< vertex indices, smaller first
 struct TriangleMesh {
   std::vector<Vec3> vertices;
   std::vector<Triangle> triangles;
+  /// Each vertex of the file it was read from: its vertex here, or -1 when no triangle uses it
+  /// (number_as_in_file); empty when the numbering is the mesh's own.
+  std::vector<int> from_file;
 };
 
 /// Every edge once, smaller index first, in order of first appearance.

@@ -25,6 +25,15 @@ class MeshFileError : public std::runtime_error {
 /// Throws MeshFileError; does not validate the mesh (see mesh_problem).
 TriangleMesh load_mesh(const std::filesystem::path& path);
 
+/// A mesh read from an OBJ file renumbered in the file's vertex order, with
+/// TriangleMesh::from_file set: load_mesh numbers its vertices in the order the faces first
+/// use them (assimp gives each face corner its own vertex), so a cloth's frames and a handle's
+/// `nodes` would follow the faces, not the file. Each vertex takes the place of the first "v"
+/// line at its position (read in single precision, as assimp reads it); a vertex no face uses
+/// is left out. Other formats, and a file whose positions cannot all be matched, keep their
+/// numbering.
+void number_as_in_file(TriangleMesh& mesh, const std::filesystem::path& path);
+
 /// The positions of a saved frame of a known mesh: the file's triangles, in order, are the
 /// mesh's triangles, so each corner gives its vertex's position (no welding, so vertices that
 /// happen to coincide stay apart). Throws MeshFileError when the file's triangle count differs

@@ -82,6 +82,10 @@ inline std::array<Vec3, 3> corners(const Membrane& membrane, const std::vector<V
 struct ClothRange {
   int first_vertex = 0, vertex_count = 0;
   int first_triangle = 0, triangle_count = 0;
+  /// A mesh cloth read from an OBJ file: each of the file's vertices, its index within the
+  /// cloth or -1 (TriangleMesh::from_file); empty otherwise (a handle's nodes are then the
+  /// cloth's own indices).
+  std::vector<int> from_file;
 };
 
 /// A pinned vertex: it follows its handle's motion from its initial position.
