@@ -6,6 +6,7 @@
 #include <chrono>
 #include <csignal>
 #include <iostream>
+#include <limits>
 #include <regex>
 
 #include "commands.h"
@@ -44,9 +45,12 @@ int render_run(const fs::path& folder, const RenderOptions& options) {
   const int first = options.still ? *options.still : options.first_frame, last = options.still ? *options.still : options.last_frame;
   for (const auto& frame : run->frames)
     if (frame.first >= first && frame.first <= last) frames.push_back(frame);
-  if (frames.empty()) {
+  // A range that names a last frame the run does not have would be cut short in silence.
+  const bool past_the_end = !options.still && options.last_frame != std::numeric_limits<int>::max() &&
+                            options.last_frame > run->frames.back().first;
+  if (frames.empty() || past_the_end) {
     std::cerr << "drape render: " << folder.string() << " has no frame "
-              << (options.still ? std::to_string(first) : "from " + std::to_string(first) + " to " + std::to_string(last))
+              << (options.still || past_the_end ? std::to_string(last) : "from " + std::to_string(first) + " to " + std::to_string(last))
               << "; its frames run from " << run->frames.front().first << " to " << run->frames.back().first << "\n";
     return EXIT_BAD_INPUT;
   }

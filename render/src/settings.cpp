@@ -133,7 +133,7 @@ RenderSettings parse_render_settings(const Scene& scene) {
     fail(scene, "/resolution", "resolution times samples squared exceeds 64 million pixels; lower one of them");
   if (r.contains("fps")) {
     s.fps = number(scene, r["fps"], "/fps");
-    if (!(s.fps > 0 && s.fps <= 240)) fail(scene, "/fps", "expected a frame rate from 0 to 240");
+    if (!(s.fps > 0 && s.fps <= 240)) fail(scene, "/fps", "expected a frame rate above 0 and at most 240");
   }
   if (r.contains("enabled")) {
     if (!r["enabled"].is_boolean()) fail(scene, "/enabled", "expected true or false");

@@ -201,7 +201,7 @@ TEST(Render, BadRenderSectionsNameThePathAndWhatWasExpected) {
        "bad.json: /render/resolution: expected each side from 16 to 8192 pixels, found [4294967312,720]"},
       {R"({"resolution": [640, -4294966816]})", "bad.json: /render/resolution: expected each side from 16 to 8192 pixels"},
       {R"({"resolution": [8192, 8192], "samples": 4})", "bad.json: /render/resolution: resolution times samples squared exceeds"},
-      {R"({"fps": 0})", "bad.json: /render/fps: expected a frame rate from 0 to 240"},
+      {R"({"fps": 0})", "bad.json: /render/fps: expected a frame rate above 0 and at most 240"},
   };
   // The message of parse_render_settings on a scene's text, "" when it accepts it.
   const auto render_error = [](const std::string& text) {
@@ -460,6 +460,7 @@ TEST(Render, TheCommandLineChoosesFramesStillAndCamera) {
       {"--frames x", "--frames: expected"},
       {"--frames 9:", "has no frame from 9 to"},
       {"--still 9", "has no frame 9; its frames run from 0 to 5"},
+      {"--frames 1:99", "has no frame 99; its frames run from 0 to 5"},
       {"--still 2 --frames 1:3", "--still and --frames: give one of them"},
       {"--output x.png", "--output: only with --still"},
       {"--camera-position 1,2", "--camera-position: expected X,Y,Z (three numbers, no spaces), found '1,2'"},
