@@ -5,6 +5,7 @@
 #include <gmpxx.h>
 
 #include <cmath>
+#include <cstdio>
 #include <fstream>
 #include <sstream>
 
@@ -115,6 +116,17 @@ QueryFile parse_query_text(const std::string& text, const std::filesystem::path&
       point[axis] = nearest_double(value);
       if (!std::isfinite(point[axis]))
         fail(path, line_number, "column " + std::to_string(2 * axis + 1) + ": value out of the range of a double");
+      if (std::abs(point[axis]) > MAX_QUERY_COORDINATE) {
+        char found[32];
+        std::snprintf(found, sizeof found, "%.3g", point[axis]);
+        fail(path, line_number,
+             "column " + std::to_string(2 * axis + 1) + ": expected a coordinate within +-1e90 (the cubic's coefficients, " +
+                 "products of three coordinates, would overflow a double), found about " + found);
+      }
+      if (point[axis] == 0 && value != 0)
+        fail(path, line_number,
+             "column " + std::to_string(2 * axis + 2) + ": the value is too small for a double (it rounds to 0); expected a "
+                                                         "denominator that leaves it representable");
     }
     const mpz_class truth = parse_integer(fields[6], path, line_number, 7);
     if (truth != 0 && truth != 1) fail(path, line_number, "column 7: expected the truth value 0 or 1");

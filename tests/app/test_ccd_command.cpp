@@ -87,6 +87,19 @@ TEST(CcdCommand, BadInputExitsWithStatusTwo) {
   const Outcome bad = run_drape("ccd " + (dir / "bad.csv").string());
   EXPECT_EQ(bad.status, 2);
   EXPECT_NE(bad.output.find((dir / "bad.csv").string() + ":2:"), std::string::npos) << bad.output;
+  // A coordinate whose cubic would overflow a double (every method but the conservative one
+  // missed such a contact), and one that rounds to zero.
+  const std::string row = ",1,0,1,0,1,0\n";
+  std::ofstream(dir / "huge.csv") << "1" + std::string(95, '0') << row << "0" << row << "0" << row << "0" << row << "0" << row
+                                  << "0" << row << "0" << row << "0" << row;
+  const Outcome huge = run_drape("ccd " + (dir / "huge.csv").string());
+  EXPECT_EQ(huge.status, 2);
+  EXPECT_NE(huge.output.find("huge.csv:1: column 1: expected a coordinate within +-1e90"), std::string::npos) << huge.output;
+  std::ofstream(dir / "tiny.csv") << "0,1,1,1" + std::string(400, '0') + ",0,1,0\n" << "0" << row << "0" << row << "0" << row
+                                  << "0" << row << "0" << row << "0" << row << "0" << row;
+  const Outcome tiny = run_drape("ccd " + (dir / "tiny.csv").string());
+  EXPECT_EQ(tiny.status, 2);
+  EXPECT_NE(tiny.output.find("tiny.csv:1: column 4: the value is too small for a double"), std::string::npos) << tiny.output;
 
   // Each message names what was wrong: the path, the flag.
   const Outcome missing = run_drape("ccd /nonexistent.csv");

@@ -28,6 +28,12 @@ struct QueryFile {
   std::vector<bool> truth;  ///< ground truth of each query: the exact trajectories touch
 };
 
+/// The largest coordinate a query file may hold: the coplanarity cubic's coefficients are
+/// products of three coordinate differences, which overflow a double beyond about 1e100 (a
+/// contact of the public set scaled by 1e105 was missed by every method but the conservative
+/// one). A coordinate beyond it, or a non-zero one that rounds to zero, is refused.
+inline constexpr double MAX_QUERY_COORDINATE = 1e90;
+
 /// The kind named by the nearest parent folder called "vertex-face" or "edge-edge".
 std::optional<QueryKind> kind_from_path(const std::filesystem::path& path);
 
