@@ -6,7 +6,9 @@
 
 #include <algorithm>
 #include <initializer_list>
+#include <cctype>
 #include <cmath>
+#include <cstdlib>
 #include <fstream>
 #include <nlohmann/json.hpp>
 #include <set>
@@ -186,6 +188,17 @@ void check_structure(const std::string& text, const std::filesystem::path& file)
       levels.push_back({c == '{', {}});
     } else if (c == '}' || c == ']') {
       if (!levels.empty()) levels.pop_back();
+    } else if (c == '-' || std::isdigit(static_cast<unsigned char>(c))) {
+      // A number beyond a double's range: the parser's message names no place.
+      std::size_t end = i + 1;
+      while (end < text.size() && (std::isdigit(static_cast<unsigned char>(text[end])) || text[end] == '.' ||
+                                   text[end] == 'e' || text[end] == 'E' || text[end] == '+' || text[end] == '-'))
+        ++end;
+      const std::string number = text.substr(i, end - i);
+      if (!std::isfinite(std::strtod(number.c_str(), nullptr)))
+        throw SceneError(file.string() + ": " + line_and_column(text, i + 1) + ": the number " + number.substr(0, 40) +
+                         " is beyond a double's range (about 1.8e308)");
+      i = end - 1;
     } else if (c == '"') {
       const std::size_t start = i;
       for (++i; i < text.size() && text[i] != '"'; ++i)
