@@ -42,8 +42,55 @@ std::string lower_extension(const std::filesystem::path& path) {
   return extension;
 }
 
+// An OBJ file's faces checked before assimp reads them, whose messages name no line ("OBJ:
+// vertex index out of range"): each corner's vertex index a whole number other than 0, from 1
+// to the file's vertex count counting forwards, or from -1 back to the first vertex counting
+// backwards from the face's line.
+void check_obj_faces(const std::string& bytes, const std::string& name) {
+  const auto is_vertex = [](std::string_view line) { return line.size() >= 2 && line[0] == 'v' && (line[1] == ' ' || line[1] == '\t'); };
+  long total = 0;
+  for (std::size_t at = 0; at < bytes.size();) {
+    const std::size_t end = std::min(bytes.find('\n', at), bytes.size());
+    total += is_vertex(std::string_view(bytes.data() + at, end - at));
+    at = end + 1;
+  }
+  long vertices = 0, line_number = 0;  // vertices so far
+  for (std::size_t at = 0; at < bytes.size();) {
+    const std::size_t end = std::min(bytes.find('\n', at), bytes.size());
+    const std::string_view line(bytes.data() + at, end - at);
+    at = end + 1;
+    ++line_number;
+    if (is_vertex(line)) ++vertices;
+    if (line.size() < 2 || line[0] != 'f' || (line[1] != ' ' && line[1] != '\t')) continue;
+    std::size_t k = 1;
+    while (k < line.size()) {
+      while (k < line.size() && (line[k] == ' ' || line[k] == '\t' || line[k] == '\r')) ++k;
+      if (k >= line.size()) break;
+      std::size_t stop = k;
+      while (stop < line.size() && line[stop] != ' ' && line[stop] != '\t' && line[stop] != '\r') ++stop;
+      const std::string_view corner = line.substr(k, stop - k);
+      const std::string_view index = corner.substr(0, corner.find('/'));
+      long value = 0;
+      const auto [ptr, error] = std::from_chars(index.data(), index.data() + index.size(), value);
+      const auto fail = [&](const std::string& what) {
+        throw MeshFileError(name + ":" + std::to_string(line_number) + ": face corner '" + std::string(corner) + "': " + what);
+      };
+      if (error != std::errc() || ptr != index.data() + index.size() || value == 0)
+        fail("expected a vertex index from 1 to " + std::to_string(total) + " (or from -1 back to -" +
+             std::to_string(vertices) + ")");
+      if (value > total)
+        fail("vertex " + std::to_string(value) + " is out of range: the file gives " + std::to_string(total) + " vertices");
+      if (value < -vertices)
+        fail("vertex " + std::to_string(value) + " is out of range: the file gives " + std::to_string(vertices) +
+             " vertices before this line");
+      k = stop;
+    }
+  }
+}
+
 // importer.ReadFile, but a PLY file is read once, checked (assimp 5.2 hangs or aborts on some
-// malformed PLY files: ply_check.h) and handed to assimp from memory.
+// malformed PLY files: ply_check.h) and handed to assimp from memory; an OBJ file's faces are
+// checked first (check_obj_faces).
 const aiScene* read_file(Assimp::Importer& importer, const std::filesystem::path& path, unsigned flags) {
   try {
     ccd::check_input_file(path, ccd::MAX_MESH_BYTES, "mesh file");
@@ -53,6 +100,13 @@ const aiScene* read_file(Assimp::Importer& importer, const std::filesystem::path
   std::ifstream in(path, std::ios::binary);
   char magic[3] = {};
   in.read(magic, 3);
+  if (lower_extension(path) == ".obj") {
+    try {
+      check_obj_faces(ccd::read_input_file(path, ccd::MAX_MESH_BYTES, "mesh file"), path.string());
+    } catch (const ccd::InputFileError& e) {
+      throw MeshFileError(e.what());
+    }
+  }
   if (lower_extension(path) != ".ply" && !looks_like_ply(std::string_view(magic, std::size_t(in.gcount()))))
     return importer.ReadFile(path.string(), flags);
   in.clear();

@@ -82,6 +82,21 @@ TEST(MeshIo, ErrorsNameTheFile) {
     EXPECT_NE(std::string(e.what()).find("/nonexistent/cloth.obj: no such mesh file"), std::string::npos);
   }
   EXPECT_THROW(save_mesh("/nonexistent/folder/x.obj", make_grid({}).mesh, "obj"), MeshFileError);
+  // An OBJ face naming a vertex the file lacks: the line and the corner (assimp's message
+  // named neither).
+  const fs::path dir = drape::testing::temp_root("mesh_faces");
+  fs::create_directories(dir);
+  for (const auto& [face, expected] : {std::pair{"f 1 2 9", "bad.obj:5: face corner '9': vertex 9 is out of range: the file gives 4 vertices"},
+                                       std::pair{"f 0 1 2", "bad.obj:5: face corner '0': expected a vertex index from 1 to 4"},
+                                       std::pair{"f -1 -2 -5", "bad.obj:5: face corner '-5': vertex -5 is out of range"}}) {
+    std::ofstream(dir / "bad.obj") << "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\n" << face << "\n";
+    try {
+      load_mesh(dir / "bad.obj");
+      FAIL() << face;
+    } catch (const MeshFileError& e) {
+      EXPECT_NE(std::string(e.what()).find(expected), std::string::npos) << e.what();
+    }
+  }
 }
 
 TEST(Mesh, TopologyOfAGrid) {
