@@ -115,7 +115,7 @@ Command add_batch_command(CLI::App& app) {
   auto args = std::make_shared<BatchArguments>();
   CLI::App* cmd = app.add_subcommand(
       "batch", "Run a list of scenes, each into its own folder, across MPI ranks when started by mpirun or srun.");
-  cmd->add_option("manifest", args->manifest, "The runs: a JSON or CSV file (below)")->required()->check(CLI::ExistingFile);
+  cmd->add_option("manifest", args->manifest, "The runs: a JSON or CSV file (below)")->required()->check(EXISTING_FILE);
   cmd->add_option("--out", args->out, "The batch's folder: batch.csv, records/, and runs without their own out (default out/<manifest name>)");
   cmd->add_option("--threads", args->threads, "Threads per run (narrow phase, projective solver)")->capture_default_str()->check(CLI::Range(1, 256));
   cmd->add_flag("-q,--quiet", args->quiet, "Print only the summary and errors");

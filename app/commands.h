@@ -24,6 +24,19 @@ inline constexpr int EXIT_RUN_STOPPED = 3;   ///< a simulation had to stop (or w
 
 using Command = std::function<int()>;
 
+// CLI11's ExistingFile, with the reason a path is not a readable file named: no such file, a
+// loop of symbolic links ("Too many levels of symbolic links"), a folder.
+inline const CLI::Validator EXISTING_FILE(
+    [](std::string& input) -> std::string {
+      std::error_code error;
+      const std::filesystem::file_status status = std::filesystem::status(input, error);
+      if (status.type() == std::filesystem::file_type::not_found) return "no such file: " + input;
+      if (error) return input + ": " + error.message();
+      if (std::filesystem::is_directory(status)) return input + " is a folder; expected a file";
+      return {};
+    },
+    "FILE");
+
 // CLI11's ranges let NaN through (every comparison with it is false), and a tolerance or
 // thickness must be a finite number.
 inline const CLI::Validator FINITE_NUMBER(

@@ -197,7 +197,7 @@ Command add_run_command(CLI::App& app) {
       "Examples:\n"
       "  drape run scenes/drape_sphere.json\n"
       "  drape run scenes/flag.json --frames 10 --out /tmp/flag --quiet");
-  cmd->add_option("scene", args->scene, "Scene file (JSON; see docs/scenes.md)")->required()->check(CLI::ExistingFile);
+  cmd->add_option("scene", args->scene, "Scene file (JSON; see docs/scenes.md)")->required()->check(EXISTING_FILE);
   cmd->add_option("--frames", args->frames, "Frames to simulate (default: the scene's)")->check(CLI::Range(1, 10000000));
   cmd->add_option("--out", args->out, "Output folder (default: the scene's output.folder)")
       ->check(CLI::Validator([](std::string& path) { return path.empty() ? std::string("expected a folder's path, not an empty string") : std::string(); },
@@ -221,7 +221,7 @@ Command add_validate_command(CLI::App& app) {
   auto scene = std::make_shared<std::string>();
   CLI::App* cmd = app.add_subcommand("validate", "Check a scene file (and its meshes) without running it.");
   cmd->footer("Exit status 0 when the scene is valid, 2 with a message naming the file and JSON path otherwise.");
-  cmd->add_option("scene", *scene, "Scene file")->required()->check(CLI::ExistingFile);
+  cmd->add_option("scene", *scene, "Scene file")->required()->check(EXISTING_FILE);
   return [scene] {
     const std::optional<Model> model = load_model(*scene, "validate");
     if (!model) return EXIT_BAD_INPUT;

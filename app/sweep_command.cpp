@@ -182,7 +182,7 @@ Command add_sweep_command(CLI::App& app) {
       "Run a scene over a grid of accuracy settings and compare each run with a reference at the most accurate "
       "setting: time per frame, vertex error (RMS and max), energy, penetrations, failures. Writes sweep.csv and a "
       "plot of time against error with the Pareto front (sweep.png, gnuplot).");
-  cmd->add_option("scene", args->scene, "Scene file (JSON)")->required()->check(CLI::ExistingFile);
+  cmd->add_option("scene", args->scene, "Scene file (JSON)")->required()->check(EXISTING_FILE);
   cmd->add_option("--frames", args->frames, "Frames per run")->capture_default_str()->check(CLI::Range(1, 100000));
   cmd->add_option("--steps", args->steps, "Steps per frame to try (default: half, once and twice the scene's)")
       ->delimiter(',')

@@ -194,4 +194,9 @@ TEST(BadInput, DevicesAndSymlinkLoopsAreRefusedWithAMessage) {
   const Outcome scene = run_drape("validate " + (dir / "loop_c.json").string());
   EXPECT_EQ(scene.status, 2) << scene.output;
   EXPECT_EQ(scene.output.find("terminate"), std::string::npos) << scene.output;
+  EXPECT_NE(scene.output.find((dir / "loop_c.json").string() + ": Too many levels of symbolic links"), std::string::npos)
+      << scene.output;
+  const Outcome folder = run_drape("run " + dir.string());
+  EXPECT_EQ(folder.status, 2) << folder.output;
+  EXPECT_NE(folder.output.find(dir.string() + " is a folder; expected a file"), std::string::npos) << folder.output;
 }
