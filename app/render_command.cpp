@@ -66,8 +66,23 @@ int render_run(const fs::path& folder, const RenderOptions& options) {
   if (options.camera_target) camera.target = *options.camera_target;
   if (options.camera_up) camera.up = *options.camera_up;
   if (options.fov) camera.fov_degrees = *options.fov;
-  if (!((camera.target - camera.position).norm() > 0) || !(camera.up.cross(camera.target - camera.position).norm() > 0)) {
-    std::cerr << "drape render: the camera's position and target must differ, and its up must not be along the view\n";
+  // Each flag that makes the camera impossible named (a scene's camera is checked when parsed).
+  const auto camera_flags = [&](bool position_target, bool up) {
+    std::string flags;
+    const auto add = [&](bool given, const char* flag) {
+      if (given) flags += std::string(flags.empty() ? " (" : ", ") + flag;
+    };
+    if (position_target) add(bool(options.camera_position), "--camera-position"), add(bool(options.camera_target), "--camera-target");
+    if (up) add(bool(options.camera_up), "--camera-up");
+    return flags.empty() ? flags : flags + ")";
+  };
+  if (!((camera.target - camera.position).norm() > 0)) {
+    std::cerr << "drape render: the camera's position and target must differ" << camera_flags(true, false) << "\n";
+    return EXIT_BAD_INPUT;
+  }
+  if (!(camera.up.cross(camera.target - camera.position).norm() > 0)) {
+    std::cerr << "drape render: the camera's up must not be zero or along its view from position to target"
+              << camera_flags(true, true) << "\n";
     return EXIT_BAD_INPUT;
   }
   const double fps = settings.fps > 0 ? settings.fps : 1.0 / model.scene.frame_time;

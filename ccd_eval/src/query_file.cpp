@@ -69,8 +69,8 @@ QueryFile read_query_file(const std::filesystem::path& path, std::optional<Query
   file.path = path;
   const auto kind = kind_override ? kind_override : kind_from_path(path);
   if (!kind)
-    fail(path, 0,
-         "cannot tell the query kind: no parent folder is named 'vertex-face' or 'edge-edge' (give --kind)");
+    throw QueryFileError(path.string() +
+                         ": cannot tell the query kind: no parent folder is named 'vertex-face' or 'edge-edge' (give --kind)");
   file.kind = *kind;
 
   std::string text;

@@ -465,7 +465,8 @@ TEST(Render, TheCommandLineChoosesFramesStillAndCamera) {
       {"--output x.png", "--output: only with --still"},
       {"--camera-position 1,2", "--camera-position: expected X,Y,Z (three numbers, no spaces), found '1,2'"},
       {"--camera-target 1,2,nan", "--camera-target: expected X,Y,Z"},
-      {"--camera-position 0,0,1 --camera-target 0,0,1", "the camera's position and target must differ"},
+      {"--camera-position 0,0,1 --camera-target 0,0,1", "the camera's position and target must differ (--camera-position, --camera-target)"},
+      {"--camera-up 0,0,0", "the camera's up must not be zero or along its view from position to target (--camera-up)"},
       {"--style fancy", "--style: expected shaded or simple, found 'fancy'"},
       {"--fov 200", "--fov"},
   };
