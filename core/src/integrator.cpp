@@ -1,8 +1,6 @@
 #include "drape/core/integrator.h"
 
 #include <algorithm>
-#include <cstdio>
-#include <cstdlib>
 #include <chrono>
 #include <iterator>
 #include <optional>
@@ -230,13 +228,6 @@ StepReport Integrator::advance(State& state) {
     if (w.free_index[v] >= 0 && h * std::max((motion[v] - solved[v]).norm(), (state.velocities[v] - solved[v]).norm()) > negligible)
       held[std::size_t(v)] = 1, changed = true;
   const int first_contacts = report.obstacle_contacts;
-  if (std::getenv("DRAPE_TRACE_SPREAD")) {
-    int count = 0; Scalar most = 0;
-    for (int v = 0; v < n; ++v) if (held[std::size_t(v)]) ++count, most = std::max(most, h * std::max((motion[v] - solved[v]).norm(), (state.velocities[v] - solved[v]).norm()));
-    int self_c = 0, mesh_c = 0, an_c = 0;
-    for (const auto& c : w.contacts) (c.self ? self_c : c.analytic ? an_c : mesh_c)++;
-    std::fprintf(stderr, "spread t=%.4f held %d most %.3g contacts self %d mesh %d analytic %d friction %zu\n", state.time, count, most, self_c, mesh_c, an_c, w.friction_blocks.size());
-  }
   if (changed) {
     if (projective_) spread_projective(state.positions, solved, motion, state.velocities, report);
     else spread_response(solved, held, motion, state.velocities, report);
