@@ -54,7 +54,7 @@ std::optional<Lattice> mesh_lattice(const Model& model, const TriangleMesh& mesh
   for (int c = 0; c < 3 && corner < 0; ++c) {
     const Vec3 e1 = x(first[std::size_t((c + 1) % 3)]) - x(first[std::size_t(c)]);
     const Vec3 e2 = x(first[std::size_t((c + 2) % 3)]) - x(first[std::size_t(c)]);
-    if (std::abs(e1.dot(e2)) <= LATTICE_TOLERANCE * e1.norm() * e2.norm()) corner = c, leg_i = e1, leg_j = e2;
+    if (std::abs(e1.dot(e2)) <= AXES_TOLERANCE * e1.norm() * e2.norm()) corner = c, leg_i = e1, leg_j = e2;
   }
   if (corner < 0) return std::nullopt;
   Lattice lattice;
@@ -90,12 +90,18 @@ std::optional<Lattice> mesh_lattice(const Model& model, const TriangleMesh& mesh
       std::abs(along_i.dot(along_j)) > LATTICE_TOLERANCE * lattice.a * lattice.b)
     return std::nullopt;
   const Scalar tolerance = LATTICE_TOLERANCE * std::min(lattice.a, lattice.b);
+  // Each vertex's point again on the fitted lattice (the first rounding used one triangle's
+  // axes), then how far it lies from it.
+  const Eigen::Matrix<Scalar, 3, 2> axes = (Eigen::Matrix<Scalar, 3, 2>() << along_i, along_j).finished();
+  const Eigen::Matrix<Scalar, 2, 3> project = (axes.transpose() * axes).inverse() * axes.transpose();
   long min_i = 0, min_j = 0, max_i = 0, max_j = 0;
   bool any = false;
   for (std::size_t v = 0; v < mesh.vertices.size(); ++v) {
     if (!used[v]) continue;
-    const auto [i, j] = ij[v];
     const Vec3 r = x(int(v)) - origin0 - offset_fit;
+    const Eigen::Matrix<Scalar, 2, 1> f = project * r;
+    ij[v] = {std::lround(f[0]), std::lround(f[1])};
+    const auto [i, j] = ij[v];
     if ((r - Scalar(i) * along_i - Scalar(j) * along_j).norm() > tolerance) return std::nullopt;
     min_i = any ? std::min(min_i, i) : i, max_i = any ? std::max(max_i, i) : i;
     min_j = any ? std::min(min_j, j) : j, max_j = any ? std::max(max_j, j) : j;

@@ -31,14 +31,20 @@ struct Lattice {
 Lattice grid_lattice(const GridMesh& grid, int offset, Scalar a, Scalar b);
 
 /// The lattice a mesh cloth lies on, or nullopt: every vertex within LATTICE_TOLERANCE of a
-/// point of a flat lattice whose axes and sides are those of the first triangle's right angle
-/// (positions from the model, global index = mesh index + offset), no two on one point, and
-/// every triangle half of one cell, a cell's two triangles sharing its diagonal.
+/// point of a flat lattice (axes from the first triangle's right angle, then fitted to every
+/// vertex by least squares; positions from the model, global index = mesh index + offset), no
+/// two on one point, and every triangle half of one cell, a cell's two triangles sharing its
+/// diagonal. A lattice 64 times larger than the mesh's vertex count (a long thin diagonal
+/// strip) is not taken: such a mesh keeps its hinges.
 std::optional<Lattice> mesh_lattice(const Model& model, const TriangleMesh& mesh, int offset);
 
-/// How far from its lattice point a vertex may lie, relative to the cell's shorter side (OBJ
-/// files written with six significant digits round a 1 m cloth's coordinates by 5e-7 m).
-inline constexpr Scalar LATTICE_TOLERANCE = 1e-4;
+/// How far from its lattice point a vertex may lie, relative to the cell's shorter side: OBJ
+/// files written with six decimals (Blender's) round coordinates by up to 5e-7 m in each, 1e-4
+/// of a 7 mm cell; a vertex moved by a hundredth of a cell is off the lattice.
+inline constexpr Scalar LATTICE_TOLERANCE = 1e-3;
+/// How far from a right angle the first triangle's corner may be (its cosine) to give the
+/// lattice's axes, which the fit to every vertex then refines and checks.
+inline constexpr Scalar AXES_TOLERANCE = 1e-2;
 
 /// The lattice's bending for rigidity B (N m) as stencils of the hinges' form (Hinge):
 /// every point between two others along a row of present edges gets u = (x[i-1] - 2 x[i] +
