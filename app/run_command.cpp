@@ -89,12 +89,18 @@ struct RunArguments {
 };
 
 // The cloth's elastic elements as the summaries print them: its springs, and its membrane
-// triangles and bending hinges where it has them (a mesh cloth with "membrane": "triangles"
+// triangles and bending stencils where it has them (a mesh cloth with "membrane": "triangles"
 // holds its fabric by triangles, not springs).
 std::string elements(const Model& model) {
   std::string text = std::to_string(model.springs.size()) + " springs";
   if (!model.membranes.empty()) text += ", " + std::to_string(model.membranes.size()) + " membrane triangles";
-  if (!model.hinges.empty()) text += ", " + std::to_string(model.hinges.size()) + " bending hinges";
+  // A grid's bending stencils (a grid, or a mesh on a grid's lattice) or hinges (other meshes).
+  if (!model.hinges.empty()) {
+    const auto lattice = std::count_if(model.cloths.begin(), model.cloths.end(), [](const ClothRange& c) { return c.lattice_bending; });
+    text += ", " + std::to_string(model.hinges.size()) +
+            (lattice == 0 ? " bending hinges" : lattice == long(model.cloths.size()) ? " bending stencils (a grid's)"
+                                                                                     : " bending stencils and hinges");
+  }
   return text;
 }
 

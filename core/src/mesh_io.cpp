@@ -17,6 +17,7 @@
 #include <cmath>
 #include <fstream>
 #include <iterator>
+#include <limits>
 #include <map>
 #include <string_view>
 
@@ -242,8 +243,8 @@ TriangleMesh load_mesh(const std::filesystem::path& path) {
   return mesh_of(importer, scene, path.string());
 }
 
-void number_as_in_file(TriangleMesh& mesh, const std::filesystem::path& path) {
-  if (lower_extension(path) != ".obj") return;
+bool number_as_in_file(TriangleMesh& mesh, const std::filesystem::path& path) {
+  if (lower_extension(path) != ".obj") return true;
   std::string bytes;
   try {
     bytes = ccd::read_input_file(path, ccd::MAX_MESH_BYTES, "mesh file");
@@ -254,8 +255,16 @@ void number_as_in_file(TriangleMesh& mesh, const std::filesystem::path& path) {
   std::map<Key, int> vertex_at;
   for (std::size_t v = 0; v < mesh.vertices.size(); ++v)
     vertex_at.emplace(Key{float(mesh.vertices[v].x()), float(mesh.vertices[v].y()), float(mesh.vertices[v].z())}, int(v));
-  // The mesh's vertex at a position read from the file: the same floats, or one unit in the
-  // last place away in each coordinate (assimp's parser and strtod may round apart).
+  // Failing the same floats (or one unit in the last place away in each coordinate: assimp's
+  // parser and strtod may round apart), the nearest vertex within a millionth of the mesh's
+  // size and a hundredth of its shortest edge (another parser's rounding of an exponent form).
+  Vec3 low = mesh.vertices.front(), high = low;
+  for (const Vec3& p : mesh.vertices) low = low.cwiseMin(p), high = high.cwiseMax(p);
+  Scalar shortest = std::numeric_limits<Scalar>::infinity();
+  for (const Triangle& t : mesh.triangles)
+    for (int k = 0; k < 3; ++k)
+      shortest = std::min(shortest, (mesh.vertices[std::size_t(t[std::size_t(k)])] - mesh.vertices[std::size_t(t[std::size_t((k + 1) % 3)])]).norm());
+  const Scalar near = std::min(1e-6 * (high - low).norm(), 0.01 * shortest);
   const auto find = [&](const Key& p) {
     if (const auto it = vertex_at.find(p); it != vertex_at.end()) return it->second;
     for (int dx = -1; dx <= 1; ++dx)
@@ -267,7 +276,16 @@ void number_as_in_file(TriangleMesh& mesh, const std::filesystem::path& path) {
             if (d[k] != 0) q[std::size_t(k)] = std::nextafter(p[std::size_t(k)], d[k] > 0 ? INFINITY : -INFINITY);
           if (const auto it = vertex_at.find(q); it != vertex_at.end()) return it->second;
         }
-    return -1;
+    // The vertices whose x is within reach, the nearest of them.
+    const Vec3 point(p[0], p[1], p[2]);
+    int best = -1;
+    Scalar best_distance = near;
+    for (auto it = vertex_at.lower_bound(Key{float(point.x() - near), -INFINITY, -INFINITY});
+         it != vertex_at.end() && it->first[0] <= point.x() + near; ++it) {
+      const Scalar distance = (mesh.vertices[std::size_t(it->second)] - point).norm();
+      if (distance <= best_distance) best = it->second, best_distance = distance;
+    }
+    return best;
   };
   std::vector<int> from_file, order;  // file vertex -> mesh vertex; the mesh's vertices in the file's order
   std::vector<char> placed(mesh.vertices.size(), 0);
@@ -278,18 +296,25 @@ void number_as_in_file(TriangleMesh& mesh, const std::filesystem::path& path) {
     if (line.size() < 2 || line[0] != 'v' || (line[1] != ' ' && line[1] != '\t')) continue;
     const std::string text(line.substr(2));
     const char* p = text.c_str();
-    Key key{};
-    for (float& c : key) {
+    std::array<double, 4> numbers{0, 0, 0, 1};
+    int count = 0;
+    for (; count < 4; ++count) {
       char* next = nullptr;
-      c = float(std::strtod(p, &next));
-      if (next == p) return;  // not three numbers: leave the numbering as it is
-      p = next;
+      const double value = std::strtod(p, &next);
+      if (next == p) break;
+      numbers[std::size_t(count)] = value, p = next;
     }
-    const int v = find(key);
-    from_file.push_back(v);
+    int v = -1;
+    if (count >= 3 && std::isfinite(numbers[0]) && std::isfinite(numbers[1]) && std::isfinite(numbers[2])) {
+      v = find(Key{float(numbers[0]), float(numbers[1]), float(numbers[2])});
+      // A homogeneous "v x y z w": the point may have been read as x/w, y/w, z/w.
+      if (v < 0 && count == 4 && std::isfinite(numbers[3]) && numbers[3] != 0)
+        v = find(Key{float(numbers[0] / numbers[3]), float(numbers[1] / numbers[3]), float(numbers[2] / numbers[3])});
+    }
+    from_file.push_back(v);  // -1: no triangle uses it (assimp leaves such vertices out)
     if (v >= 0 && !placed[std::size_t(v)]) placed[std::size_t(v)] = 1, order.push_back(v);
   }
-  if (order.size() != mesh.vertices.size()) return;  // a vertex the file's lines do not give: keep the numbering
+  if (order.size() != mesh.vertices.size()) return false;  // a vertex no "v" line gives: the numbering is not the file's
   std::vector<int> renumbered(mesh.vertices.size());
   TriangleMesh out;
   for (std::size_t k = 0; k < order.size(); ++k) {
@@ -302,6 +327,7 @@ void number_as_in_file(TriangleMesh& mesh, const std::filesystem::path& path) {
     if (v >= 0) v = renumbered[std::size_t(v)];
   out.from_file = std::move(from_file);
   mesh = std::move(out);
+  return true;
 }
 
 TriangleMesh parse_mesh(const std::string& bytes, const std::string& format, const std::string& name) {

@@ -384,6 +384,7 @@ Model build_model(const Scene& scene) {
            "solver for 'membrane' 'triangles', or 'springs'");
     std::optional<GridMesh> grid;
     TriangleMesh mesh;
+    bool numbering_lost = false;
     if (spec.grid) {
       grid = make_grid(*spec.grid);
       mesh = grid->mesh;
@@ -392,13 +393,14 @@ Model build_model(const Scene& scene) {
       // The cloth's vertices in the file's order: its frames list them so, and a handle's
       // nodes name them so.
       try {
-        number_as_in_file(mesh, spec.mesh_file);
+        numbering_lost = !number_as_in_file(mesh, spec.mesh_file);
       } catch (const MeshFileError& e) {
         fail(scene, path + "/mesh", e.what());
       }
     }
     ClothRange range;
     range.from_file = mesh.from_file;
+    range.numbering_lost = numbering_lost;
     range.first_vertex = int(model.initial_positions.size());
     range.vertex_count = int(mesh.vertices.size());
     range.first_triangle = int(model.triangles.size());
@@ -462,10 +464,13 @@ Model build_model(const Scene& scene) {
     if (grid) {
       const auto [a, b] = cell_sides(model, *grid, offset);
       add_lattice_bending(model, grid_lattice(*grid, offset, a, b), m.bending_rigidity, m.damping);
-    }
-    else if (const auto lattice = m.bending_rigidity > 0 ? mesh_lattice(model, mesh, offset) : std::nullopt)
+      range.lattice_bending = m.bending_rigidity > 0;
+    } else if (const auto lattice = m.bending_rigidity > 0 ? mesh_lattice(model, mesh, offset) : std::nullopt) {
       add_lattice_bending(model, *lattice, m.bending_rigidity, m.damping);
-    else add_hinges(model, mesh, offset, m.bending_rigidity, m.damping);
+      range.lattice_bending = true;
+    } else {
+      add_hinges(model, mesh, offset, m.bending_rigidity, m.damping);
+    }
     model.cloths.push_back(range);
   }
 
@@ -496,6 +501,9 @@ Model build_model(const Scene& scene) {
     for (std::size_t k = 0; k < handle.nodes.size(); ++k) {
       const int node = handle.nodes[k];
       const std::string at = path + "/nodes/" + std::to_string(k);
+      if (range.numbering_lost)
+        fail(scene, at, "cloth " + std::to_string(handle.cloth) + "'s mesh file gives a vertex in a form drape cannot match to "
+                            "its 'v' line, so its numbering is not the file's; expected the vertices named by a 'box' or 'ball'");
       // A mesh read from an OBJ file: the file's vertex numbering (from 0), which may count
       // vertices no triangle uses.
       const int count = range.from_file.empty() ? range.vertex_count : int(range.from_file.size());

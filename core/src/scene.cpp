@@ -263,8 +263,10 @@ Scene parse_scene(const std::string& text, const std::filesystem::path& file) {
   if (n.has("end_time")) {
     const Scalar end = n.at("end_time").positive(), frames = std::round(end / s.frame_time);
     if (!(frames <= MAX_FRAMES)) n.at("end_time").fail("expected at most " + std::to_string(MAX_FRAMES) + " frames (end_time / frame_time)");
-    // A whole number of frames: a run ends on a frame, so another end would be moved silently.
-    if (!(frames >= 1 && std::abs(end / s.frame_time - frames) <= 1e-6 * frames)) {
+    // A whole number of frames (to a thousandth of one: a frame_time of 1/30 written with
+    // seven digits gives 60.00006 frames in 2 s): a run ends on a frame, so another end would
+    // be moved silently.
+    if (!(frames >= 1 && std::abs(end / s.frame_time - frames) <= 1e-3)) {
       std::ostringstream what;
       what.precision(10);
       what << "expected a whole number of frames of " << s.frame_time << " s (frame_time); " << end << " s is "

@@ -89,7 +89,7 @@ TEST(RunCommand, ValidateAcceptsAndRejects) {
 }
 
 // The summaries name what holds the cloth: a mesh cloth whose membrane is triangles has a
-// membrane triangle for each of its mesh's faces (and its bending hinges), not only springs.
+// membrane triangle for each of its mesh's faces, not only springs, and which bending model.
 TEST(RunCommand, ValidateCountsAMembranesTriangles) {
   const std::string mesh = SOURCE + "/scenes/meshes/disc_30cm_cells_12mm.obj";
   std::ifstream obj(mesh);
@@ -101,7 +101,13 @@ TEST(RunCommand, ValidateCountsAMembranesTriangles) {
   const Outcome outcome = run_drape("validate " + scene.string());
   EXPECT_EQ(outcome.status, 0) << outcome.output;
   EXPECT_NE(outcome.output.find(", " + std::to_string(faces) + " membrane triangles, "), std::string::npos) << outcome.output;
-  EXPECT_NE(outcome.output.find(" bending hinges, "), std::string::npos) << outcome.output;
+  // The disc of half cells lies on a grid's lattice: the grid's bending stencils; the ring
+  // disc's triangles are not a lattice's: hinges.
+  EXPECT_NE(outcome.output.find(" bending stencils (a grid's), "), std::string::npos) << outcome.output;
+  const fs::path ring = write_scene("ring", R"({"cloths": [{"mesh": ")" + SOURCE + R"(/scenes/meshes/disc_30cm_12mm.obj", "material": {"preset": "royal-target"}}]})");
+  const Outcome hinges = run_drape("validate " + ring.string());
+  EXPECT_EQ(hinges.status, 0) << hinges.output;
+  EXPECT_NE(hinges.output.find(" bending hinges, "), std::string::npos) << hinges.output;
 }
 
 // A scene whose cloth starts through a mesh obstacle is bad input (core's

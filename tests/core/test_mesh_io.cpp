@@ -38,20 +38,21 @@ TEST(MeshIo, AnObjClothKeepsTheFilesVertexOrder) {
   const fs::path dir = drape::testing::temp_root("mesh_order");
   fs::create_directories(dir);
   {
-    // Vertex 0 unused; the faces use 4 and 3 before 1 and 2; vertex 5 repeats vertex 1's position.
+    // Vertex 0 unused; the faces use 4 and 3 before 1 and 2; vertex 3 homogeneous (w = 2,
+    // read as (1, 1, 0)); vertex 5 repeats vertex 1's position; vertex 6, not a number, unused.
     std::ofstream obj(dir / "square.obj");
-    obj << "v 5 5 5\nv 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nv 0 0 0\nf 5 4 2\nf 4 3 6\n";
+    obj << "v 5 5 5\nv 0 0 0\nv 1 0 0\nv 2 2 0 2\nv 0 1 0\nv 0 0 0\nv nan nan nan\nf 5 4 2\nf 4 3 6\n";
   }
   TriangleMesh mesh = load_mesh(dir / "square.obj");
   ASSERT_EQ(mesh.vertices.size(), 4u);
   EXPECT_EQ(mesh.vertices[0], Vec3(0, 1, 0));  // as the faces first use them
-  number_as_in_file(mesh, dir / "square.obj");
+  EXPECT_TRUE(number_as_in_file(mesh, dir / "square.obj"));
   ASSERT_EQ(mesh.vertices.size(), 4u);
   EXPECT_EQ(mesh.vertices[0], Vec3(0, 0, 0));
   EXPECT_EQ(mesh.vertices[1], Vec3(1, 0, 0));
   EXPECT_EQ(mesh.vertices[2], Vec3(1, 1, 0));
   EXPECT_EQ(mesh.vertices[3], Vec3(0, 1, 0));
-  EXPECT_EQ(mesh.from_file, (std::vector<int>{-1, 0, 1, 2, 3, 0}));
+  EXPECT_EQ(mesh.from_file, (std::vector<int>{-1, 0, 1, 2, 3, 0, -1}));
   EXPECT_EQ(mesh.triangles, (std::vector<Triangle>{{3, 2, 0}, {2, 1, 0}}));
   EXPECT_EQ(mesh_problem(mesh), "");
 
@@ -71,7 +72,17 @@ TEST(MeshIo, AnObjClothKeepsTheFilesVertexOrder) {
               std::string::npos)
         << e.what();
   }
-  EXPECT_THROW(build_model(scene(6)), SceneError);  // the file has 6 vertices
+  EXPECT_THROW(build_model(scene(6)), SceneError);  // unused
+  EXPECT_THROW(build_model(scene(7)), SceneError);  // the file has 7 vertices
+
+  // A vertex no "v" line gives (here one moved after reading): the numbering is not the
+  // file's, and the mesh is left as it was.
+  TriangleMesh moved = load_mesh(dir / "square.obj");
+  moved.vertices[1] += Vec3(0.1, 0, 0);
+  const TriangleMesh before = moved;
+  EXPECT_FALSE(number_as_in_file(moved, dir / "square.obj"));
+  EXPECT_EQ(moved.vertices, before.vertices);
+  EXPECT_TRUE(moved.from_file.empty());
 }
 
 TEST(MeshIo, ErrorsNameTheFile) {

@@ -29,10 +29,11 @@ TriangleMesh load_mesh(const std::filesystem::path& path);
 /// TriangleMesh::from_file set: load_mesh numbers its vertices in the order the faces first
 /// use them (assimp gives each face corner its own vertex), so a cloth's frames and a handle's
 /// `nodes` would follow the faces, not the file. Each vertex takes the place of the first "v"
-/// line at its position (read in single precision, as assimp reads it); a vertex no face uses
-/// is left out. Other formats, and a file whose positions cannot all be matched, keep their
-/// numbering.
-void number_as_in_file(TriangleMesh& mesh, const std::filesystem::path& path);
+/// line at its position (read in single precision, as assimp reads it, or nearest to it
+/// within a millionth of the mesh's size); a vertex no face uses is left out. Other formats
+/// keep their numbering (true). False, the mesh unchanged, when a vertex of the mesh matches no
+/// "v" line: its numbering is then not the file's.
+bool number_as_in_file(TriangleMesh& mesh, const std::filesystem::path& path);
 
 /// The positions of a saved frame of a known mesh: the file's triangles, in order, are the
 /// mesh's triangles, so each corner gives its vertex's position (no welding, so vertices that

@@ -86,6 +86,11 @@ struct ClothRange {
   /// cloth or -1 (TriangleMesh::from_file); empty otherwise (a handle's nodes are then the
   /// cloth's own indices).
   std::vector<int> from_file;
+  /// An OBJ cloth whose file numbering could not be recovered (number_as_in_file): a handle's
+  /// nodes on it are refused.
+  bool numbering_lost = false;
+  /// Its bending stencils are a grid's (a grid, or a mesh on a grid's lattice), not hinges.
+  bool lattice_bending = false;
 };
 
 /// A pinned vertex: it follows its handle's motion from its initial position.
