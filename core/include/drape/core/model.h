@@ -122,7 +122,7 @@ struct Model {
 
   std::size_t vertex_count() const { return initial_positions.size(); }
   /// The cloth mesh with the given positions (all cloths).
-  TriangleMesh cloth_mesh(const std::vector<Vec3>& positions) const { return {positions, triangles}; }
+  TriangleMesh cloth_mesh(const std::vector<Vec3>& positions) const { return {positions, triangles, {}}; }
 };
 
 /// Builds and validates the model. Throws SceneError naming the scene file and the JSON path
