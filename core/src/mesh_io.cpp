@@ -10,6 +10,7 @@
 #include <assimp/scene.h>
 
 #include <array>
+#include <algorithm>
 #include <cctype>
 #include <charconv>
 #include <cstdio>
@@ -43,34 +44,48 @@ std::string lower_extension(const std::filesystem::path& path) {
   return extension;
 }
 
+// Each line of a text (without its '\n') and its number from 1.
+template <class F>
+void for_each_line(std::string_view text, F&& f) {
+  std::size_t number = 0;
+  for (std::size_t at = 0; at < text.size();) {
+    const std::size_t end = std::min(text.find('\n', at), text.size());
+    f(text.substr(at, end - at), ++number);
+    at = end + 1;
+  }
+}
+
+// Whether an OBJ line is a vertex ('v') or a face ('f') line: the keyword, then a space or tab.
+bool obj_line_is(std::string_view line, char keyword) {
+  return line.size() >= 2 && line[0] == keyword && (line[1] == ' ' || line[1] == '\t');
+}
+
+// Each corner of an OBJ face line: its text and the text of its vertex index (before any '/').
+template <class F>
+void for_each_corner(std::string_view line, F&& f) {
+  std::size_t p = 2;
+  while (p < line.size()) {
+    while (p < line.size() && std::isspace(static_cast<unsigned char>(line[p]))) ++p;
+    if (p >= line.size()) break;
+    const std::size_t token_end = std::min(line.find_first_of(" \t\r", p), line.size());
+    const std::string_view corner = line.substr(p, token_end - p);
+    p = token_end;
+    f(corner, corner.substr(0, corner.find('/')));
+  }
+}
+
 // An OBJ file's faces checked before assimp reads them, whose messages name no line ("OBJ:
 // vertex index out of range"): each corner's vertex index a whole number other than 0, from 1
 // to the file's vertex count counting forwards, or from -1 back to the first vertex counting
 // backwards from the face's line.
 void check_obj_faces(const std::string& bytes, const std::string& name) {
-  const auto is_vertex = [](std::string_view line) { return line.size() >= 2 && line[0] == 'v' && (line[1] == ' ' || line[1] == '\t'); };
   long total = 0;
-  for (std::size_t at = 0; at < bytes.size();) {
-    const std::size_t end = std::min(bytes.find('\n', at), bytes.size());
-    total += is_vertex(std::string_view(bytes.data() + at, end - at));
-    at = end + 1;
-  }
-  long vertices = 0, line_number = 0;  // vertices so far
-  for (std::size_t at = 0; at < bytes.size();) {
-    const std::size_t end = std::min(bytes.find('\n', at), bytes.size());
-    const std::string_view line(bytes.data() + at, end - at);
-    at = end + 1;
-    ++line_number;
-    if (is_vertex(line)) ++vertices;
-    if (line.size() < 2 || line[0] != 'f' || (line[1] != ' ' && line[1] != '\t')) continue;
-    std::size_t k = 1;
-    while (k < line.size()) {
-      while (k < line.size() && (line[k] == ' ' || line[k] == '\t' || line[k] == '\r')) ++k;
-      if (k >= line.size()) break;
-      std::size_t stop = k;
-      while (stop < line.size() && line[stop] != ' ' && line[stop] != '\t' && line[stop] != '\r') ++stop;
-      const std::string_view corner = line.substr(k, stop - k);
-      const std::string_view index = corner.substr(0, corner.find('/'));
+  for_each_line(bytes, [&](std::string_view line, std::size_t) { total += obj_line_is(line, 'v'); });
+  long vertices = 0;  // so far
+  for_each_line(bytes, [&](std::string_view line, std::size_t line_number) {
+    if (obj_line_is(line, 'v')) ++vertices;
+    if (!obj_line_is(line, 'f')) return;
+    for_each_corner(line, [&](std::string_view corner, std::string_view index) {
       long value = 0;
       const auto [ptr, error] = std::from_chars(index.data(), index.data() + index.size(), value);
       const auto fail = [&](const std::string& what) {
@@ -84,9 +99,8 @@ void check_obj_faces(const std::string& bytes, const std::string& name) {
       if (value < -vertices)
         fail("vertex " + std::to_string(value) + " is out of range: the file gives " + std::to_string(vertices) +
              " vertices before this line");
-      k = stop;
-    }
-  }
+    });
+  });
 }
 
 // importer.ReadFile, but a PLY file is read once, checked (assimp 5.2 hangs or aborts on some
@@ -182,16 +196,10 @@ std::vector<std::array<Vec3, 3>> obj_triangles(const std::string& text, const st
   total = 0;
   std::vector<Vec3> vertices;
   std::vector<std::array<Vec3, 3>> triangles;
-  std::size_t line_number = 0;
-  std::size_t begin = 0;
-  while (begin < text.size()) {
-    std::size_t end = text.find('\n', begin);
-    if (end == std::string::npos) end = text.size();
-    const std::string line = text.substr(begin, end - begin);
-    begin = end + 1;
-    ++line_number;
+  for_each_line(text, [&](std::string_view view, std::size_t line_number) {
     const auto where = [&] { return name + ":" + std::to_string(line_number) + ": "; };
-    if (line.rfind("v ", 0) == 0 || line.rfind("v\t", 0) == 0) {
+    if (obj_line_is(view, 'v')) {
+      const std::string line(view);  // strtod needs the terminating NUL
       double x, y, z;
       char* next = nullptr;
       const char* p = line.c_str() + 2;
@@ -205,33 +213,26 @@ std::vector<std::array<Vec3, 3>> obj_triangles(const std::string& text, const st
         throw MeshFileError(where() + "more than " + std::to_string(max_vertices) + " vertices for a frame of " +
                             std::to_string(max_triangles) + " triangles");
       vertices.emplace_back(x, y, z);
-    } else if (line.rfind("f ", 0) == 0 || line.rfind("f\t", 0) == 0) {
+    } else if (obj_line_is(view, 'f')) {
       std::vector<Vec3> corners;
-      std::size_t p = 2;
-      while (p < line.size()) {
-        while (p < line.size() && std::isspace(static_cast<unsigned char>(line[p]))) ++p;
-        if (p >= line.size()) break;
-        const std::size_t token_end = line.find_first_of(" \t\r", p);
-        const std::string token = line.substr(p, token_end == std::string::npos ? std::string::npos : token_end - p);
-        p = token_end == std::string::npos ? line.size() : token_end;
+      for_each_corner(view, [&](std::string_view token, std::string_view number) {
         long index = 0;
-        const std::string number = token.substr(0, token.find('/'));
         const auto [rest, problem] = std::from_chars(number.data(), number.data() + number.size(), index);
         if (problem != std::errc() || rest != number.data() + number.size() || index == 0)
-          throw MeshFileError(where() + "expected a vertex index, found '" + token + "'");
+          throw MeshFileError(where() + "expected a vertex index, found '" + std::string(token) + "'");
         // Negative indices count back from the last vertex read.
         const long resolved = index > 0 ? index - 1 : long(vertices.size()) + index;
         if (resolved < 0 || resolved >= long(vertices.size()))
-          throw MeshFileError(where() + "vertex index " + number + " refers to no vertex read so far");
+          throw MeshFileError(where() + "vertex index " + std::string(number) + " refers to no vertex read so far");
         if (corners.size() == max_triangles + 2)
           throw MeshFileError(name + ": expected " + std::to_string(max_triangles) + " triangles, found more");
         corners.push_back(vertices[std::size_t(resolved)]);
-      }
-      if (corners.size() < 3) continue;  // assimp reads these as points and lines
+      });
+      if (corners.size() < 3) return;  // assimp reads these as points and lines
       for (std::size_t k = 1; k + 1 < corners.size(); ++k, ++total)
         if (triangles.size() < max_triangles) triangles.push_back({corners[0], corners[k], corners[k + 1]});
     }
-  }
+  });
   return triangles;
 }
 
@@ -289,12 +290,9 @@ bool number_as_in_file(TriangleMesh& mesh, const std::filesystem::path& path) {
   };
   std::vector<int> from_file, order;  // file vertex -> mesh vertex; the mesh's vertices in the file's order
   std::vector<char> placed(mesh.vertices.size(), 0);
-  for (std::size_t at = 0; at < bytes.size();) {
-    const std::size_t end = std::min(bytes.find('\n', at), bytes.size());
-    const std::string_view line(bytes.data() + at, end - at);
-    at = end + 1;
-    if (line.size() < 2 || line[0] != 'v' || (line[1] != ' ' && line[1] != '\t')) continue;
-    const std::string text(line.substr(2));
+  for_each_line(bytes, [&](std::string_view line, std::size_t) {
+    if (!obj_line_is(line, 'v')) return;
+    const std::string text(line.substr(2));  // strtod needs the terminating NUL
     const char* p = text.c_str();
     std::array<double, 4> numbers{0, 0, 0, 1};
     int count = 0;
@@ -313,7 +311,7 @@ bool number_as_in_file(TriangleMesh& mesh, const std::filesystem::path& path) {
     }
     from_file.push_back(v);  // -1: no triangle uses it (assimp leaves such vertices out)
     if (v >= 0 && !placed[std::size_t(v)]) placed[std::size_t(v)] = 1, order.push_back(v);
-  }
+  });
   if (order.size() != mesh.vertices.size()) return false;  // a vertex no "v" line gives: the numbering is not the file's
   std::vector<int> renumbered(mesh.vertices.size());
   TriangleMesh out;

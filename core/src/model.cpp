@@ -384,7 +384,7 @@ Model build_model(const Scene& scene) {
            "solver for 'membrane' 'triangles', or 'springs'");
     std::optional<GridMesh> grid;
     TriangleMesh mesh;
-    bool numbering_lost = false;
+    ClothRange range;
     if (spec.grid) {
       grid = make_grid(*spec.grid);
       mesh = grid->mesh;
@@ -393,14 +393,12 @@ Model build_model(const Scene& scene) {
       // The cloth's vertices in the file's order: its frames list them so, and a handle's
       // nodes name them so.
       try {
-        numbering_lost = !number_as_in_file(mesh, spec.mesh_file);
+        range.numbering_lost = !number_as_in_file(mesh, spec.mesh_file);
       } catch (const MeshFileError& e) {
         fail(scene, path + "/mesh", e.what());
       }
     }
-    ClothRange range;
     range.from_file = mesh.from_file;
-    range.numbering_lost = numbering_lost;
     range.first_vertex = int(model.initial_positions.size());
     range.vertex_count = int(mesh.vertices.size());
     range.first_triangle = int(model.triangles.size());
