@@ -1,10 +1,12 @@
 #include "drape/core/linear_solver.h"
 
-#include <Eigen/CholmodSupport>
+#include <cholmod.h>
 #include <Eigen/IterativeLinearSolvers>
 #include <omp.h>
 
+#include <algorithm>
 #include <limits>
+#include <vector>
 #ifdef __GLIBC__
 #include <malloc.h>
 #endif
@@ -168,7 +170,53 @@ extern "C" void GOMP_parallel(void (*body)(void*), void* data, unsigned /*num_th
   body(data);
 }
 
+namespace {
+// A CHOLMOD view of A's lower triangle (A stores both; CHOLMOD reads the lower), no copy.
+cholmod_sparse lower_view(const SparseMatrix& A, double* values) {
+  cholmod_sparse v{};
+  v.nrow = v.ncol = size_t(A.rows());
+  v.nzmax = size_t(A.nonZeros());
+  v.p = const_cast<SparseMatrix::StorageIndex*>(A.outerIndexPtr());
+  v.i = const_cast<SparseMatrix::StorageIndex*>(A.innerIndexPtr());
+  v.x = values;
+  v.stype = -1;
+  v.itype = CHOLMOD_INT;
+  v.xtype = CHOLMOD_REAL;
+  v.dtype = CHOLMOD_DOUBLE;
+  v.sorted = 1;
+  v.packed = 1;
+  return v;
+}
+
+cholmod_dense dense_view(const Scalar* values, Eigen::Index rows, Eigen::Index cols) {
+  cholmod_dense v{};
+  v.nrow = size_t(rows);
+  v.ncol = size_t(cols);
+  v.nzmax = size_t(rows) * size_t(cols);
+  v.d = size_t(rows);
+  v.x = const_cast<Scalar*>(values);
+  v.xtype = CHOLMOD_REAL;
+  v.dtype = CHOLMOD_DOUBLE;
+  return v;
+}
+}  // namespace
+
+// CHOLMOD's own factorise permutes the matrix into the supernodal kernel's form, tril(P A P'),
+// by two sparse transposes of the lower triangle every call: 7.8 % of the pile's first 24
+// frames (perf), about a sixth of what the factorisations cost. The permuted matrix's
+// pattern depends on A's alone, so it is made once per analysis, the same two transposes run
+// on A's entry numbers; each factorisation then only gathers A's values into it and runs the
+// supernodal kernel (cholmod_super_numeric) on the same matrix, to the bit, as before.
 struct CholmodFactor::Impl {
+  Impl() { cholmod_start(&c); }
+  ~Impl() {
+    cholmod_free_sparse(&permuted, &c);
+    cholmod_free_factor(&L, &c);
+    cholmod_finish(&c);
+  }
+  Impl(const Impl&) = delete;
+  Impl& operator=(const Impl&) = delete;
+
   bool same_pattern(const SparseMatrix& A) const {
     return analyses > 0 && A.rows() == rows && A.nonZeros() == nonzeros &&
            std::equal(A.outerIndexPtr(), A.outerIndexPtr() + A.outerSize() + 1, outer.begin()) &&
@@ -180,9 +228,65 @@ struct CholmodFactor::Impl {
     outer.assign(A.outerIndexPtr(), A.outerIndexPtr() + A.outerSize() + 1);
     inner.assign(A.innerIndexPtr(), A.innerIndexPtr() + A.nonZeros());
   }
-  Eigen::CholmodDecomposition<SparseMatrix, Eigen::Lower> llt;
+  // Sets CHOLMOD's mode as Eigen's CholmodDecomposition did: automatic (supernodal or
+  // simplicial, the factor kept as the kernel made it) or simplicial LL'.
+  void set_mode(bool simplicial) {
+    c.final_asis = simplicial ? 0 : 1;
+    c.supernodal = simplicial ? CHOLMOD_SIMPLICIAL : CHOLMOD_AUTO;
+    if (simplicial) c.final_ll = 1;
+  }
+  void analyse(const SparseMatrix& A) {
+    cholmod_free_sparse(&permuted, &c);
+    cholmod_free_factor(&L, &c);
+    cholmod_sparse view = lower_view(A, const_cast<Scalar*>(A.valuePtr()));
+    L = cholmod_analyze(&view, &c);
+  }
+  // tril(P A P') with the number of A's entry in place of each value: CHOLMOD's factorise
+  // makes it by these two transposes (triu(P A P') from the lower triangle, then its transpose).
+  void number_permuted(const SparseMatrix& A) {
+    std::vector<double> numbers(size_t(A.nonZeros()));
+    for (size_t k = 0; k < numbers.size(); ++k) numbers[k] = double(k);
+    cholmod_sparse view = lower_view(A, numbers.data());
+    cholmod_sparse* upper = cholmod_ptranspose(&view, 2, static_cast<int*>(L->Perm), nullptr, 0, &c);
+    permuted = upper ? cholmod_ptranspose(upper, 2, nullptr, nullptr, 0, &c) : nullptr;
+    cholmod_free_sparse(&upper, &c);
+    if (!permuted) return;
+    const auto* x = static_cast<const double*>(permuted->x);
+    const auto* p = static_cast<const int*>(permuted->p);
+    source.resize(size_t(p[permuted->ncol]));
+    for (size_t k = 0; k < source.size(); ++k) source[k] = SparseMatrix::StorageIndex(x[k]);
+  }
+  // Factorises A; false when it is not positive definite (or CHOLMOD failed).
+  bool numeric(const SparseMatrix& A) {
+    const double zero[2] = {0, 0};
+    if (!L) return false;
+    if (L->is_super && permuted) {
+      auto* x = static_cast<double*>(permuted->x);
+      const Scalar* a = A.valuePtr();
+      for (size_t k = 0; k < source.size(); ++k) x[k] = a[source[k]];
+      if (!cholmod_super_numeric(permuted, nullptr, const_cast<double*>(zero), L, &c)) return false;
+    } else {
+      cholmod_sparse view = lower_view(A, const_cast<Scalar*>(A.valuePtr()));
+      if (!cholmod_factorize_p(&view, const_cast<double*>(zero), nullptr, 0, L, &c)) return false;
+    }
+    return L->minor == L->n;  // on failure, the column where it failed
+  }
+  bool solve(const Scalar* b, Scalar* x, Eigen::Index rows, Eigen::Index cols) {
+    cholmod_dense bv = dense_view(b, rows, cols);
+    cholmod_dense* xv = cholmod_solve(CHOLMOD_A, L, &bv, &c);
+    if (!xv) return false;
+    std::copy_n(static_cast<const double*>(xv->x), rows * cols, x);
+    cholmod_free_dense(&xv, &c);
+    return true;
+  }
+
+  cholmod_common c;
+  cholmod_factor* L = nullptr;
+  cholmod_sparse* permuted = nullptr;               // tril(P A P') for the supernodal kernel
+  std::vector<SparseMatrix::StorageIndex> source;   // permuted's k-th value is A's source[k]-th
   int analyses = 0, factorisations = 0;
   bool empty = false;  // the last matrix had no rows
+  bool factorised = false;
   Eigen::Index rows = 0, nonzeros = 0;
   std::vector<SparseMatrix::StorageIndex> outer, inner;
 };
@@ -195,7 +299,7 @@ CholmodFactor::CholmodFactor(Use use) : impl_(std::make_unique<Impl>()), use_(us
   // first 12 frames 1,156 -> 935 ms, of the pile's first 6 frames 2,555 -> 2,330 ms (medians of
   // 3 and 4 alternating runs); 8, 32, 96 and 32, 64, 128 did no better. Read by each supernodal
   // analysis.
-  cholmod_common& c = impl_->llt.cholmod();
+  cholmod_common& c = impl_->c;
   c.nrelax[0] = 16, c.nrelax[1] = 64, c.nrelax[2] = 128;
   c.zrelax[0] = 0.8, c.zrelax[1] = 0.2, c.zrelax[2] = 0.1;
 }
@@ -220,19 +324,19 @@ bool CholmodFactor::factorise(const SparseMatrix& A) {
     // for many solves stays simplicial: its triangular solves with three right-hand sides are
     // the faster ones (docs/solvers.md). CHOLMOD's analysis in its automatic mode takes that
     // rule; a simplicial pick is analysed again as LL' (automatic mode would factorise LDL').
-    f.llt.setMode(use_ == Use::Refactorised ? Eigen::CholmodAuto : Eigen::CholmodSimplicialLLt);
-    const cholmod_common& c = f.llt.cholmod();
-    f.llt.analyzePattern(A);
-    if (use_ == Use::Refactorised && !(c.lnz > 0 && c.fl / c.lnz >= c.supernodal_switch)) {
-      f.llt.setMode(Eigen::CholmodSimplicialLLt);
-      f.llt.analyzePattern(A);
+    f.set_mode(use_ == Use::ManySolves);
+    f.analyse(A);
+    if (use_ == Use::Refactorised && f.L && !f.L->is_super) {
+      f.set_mode(true);
+      f.analyse(A);
     }
+    if (f.L && f.L->is_super) f.number_permuted(A);
     ++f.analyses;
     f.remember_pattern(A);
   }
-  f.llt.factorize(A);
   ++f.factorisations;
-  return f.llt.info() == Eigen::Success;
+  f.factorised = f.numeric(A);
+  return f.factorised;
 }
 
 bool CholmodFactor::solve(const Eigen::Matrix<Scalar, Eigen::Dynamic, 3>& B,
@@ -241,9 +345,10 @@ bool CholmodFactor::solve(const Eigen::Matrix<Scalar, Eigen::Dynamic, 3>& B,
     X.resize(0, 3);
     return true;
   }
+  if (!impl_->factorised) return false;
   serial_openmp();
-  X = impl_->llt.solve(B);
-  return impl_->llt.info() == Eigen::Success && X.allFinite();
+  X.resize(B.rows(), 3);
+  return impl_->solve(B.data(), X.data(), B.rows(), 3) && X.allFinite();
 }
 
 bool CholmodFactor::solve(const VectorX& b, VectorX& x) const {
@@ -251,9 +356,10 @@ bool CholmodFactor::solve(const VectorX& b, VectorX& x) const {
     x.resize(0);
     return true;
   }
+  if (!impl_->factorised) return false;
   serial_openmp();
-  x = impl_->llt.solve(b);
-  return impl_->llt.info() == Eigen::Success && x.allFinite();
+  x.resize(b.size());
+  return impl_->solve(b.data(), x.data(), b.size(), 1) && x.allFinite();
 }
 
 int CholmodFactor::analyses() const { return impl_->analyses; }
