@@ -237,11 +237,11 @@ bool Integrator::solve_linearised(State& state, const std::vector<Vec3>& pinned_
   // Solved again for the ground's pulls, the pile's heaped frames factorised the system twice
   // a step.
   std::vector<char> held(w.contacts.size(), 1);
-  std::vector<std::pair<std::array<int, 5>, Vec3>> still_released;
+  std::vector<char> released_before(w.contacts.size(), 0);  // released for an earlier step's pull
   for (std::size_t k = 0; k < w.contacts.size(); ++k)
     if (w.lagged.is_released(w.contacts[k]) && !(normal_velocity(w.contacts[k], nullptr) < w.contacts[k].target))
-      held[k] = 0, still_released.emplace_back(contact_key(w.contacts[k]), w.contacts[k].normal);
-  w.lagged.released = std::move(still_released);
+      held[k] = 0, released_before[k] = 1;
+  w.lagged.released.clear();
   hold_contacts(1, held);
   w.contact_impulses.assign(w.contacts.size(), 0);
   std::vector<Vec3> layers_push(static_cast<std::size_t>(n));  // per vertex: the held layers' contacts' push
@@ -317,6 +317,15 @@ bool Integrator::solve_linearised(State& state, const std::vector<Vec3>& pinned_
     for (std::size_t k = 0; k < w.contacts.size(); ++k)
       if (closing[k]) held[k] = 1, released_now[k] = 0;
   }
+  // A contact released for an earlier pull stays released while the solve does not move its
+  // vertices in: their speed at the step's start is no test of that once the response has
+  // stopped them. A ribbon's vertex resting on the ground, released for one step's pull, fell
+  // in every later solve (nothing held it), the response stopped it, and every step of the
+  // pile's frames 6-24 spread that stop through a second factorisation.
+  for (std::size_t k = 0; k < w.contacts.size(); ++k)
+    if (released_before[k] && !held[k] &&
+        !(h * (w.contacts[k].target - normal_velocity(w.contacts[k], &w.solution)) > NEGLIGIBLE_MOTION * m.scene.collisions.thickness))
+      w.lagged.released.emplace_back(contact_key(w.contacts[k]), w.contacts[k].normal);
   std::sort(w.lagged.released.begin(), w.lagged.released.end(), [](const auto& x, const auto& y) { return x.first < y.first; });
   w.contact_held = held;
   // The work the held contacts did on the cloth at moving obstacles' velocities (their normal
