@@ -92,11 +92,28 @@ ccd::Candidates CollisionPipeline::Impl::candidates(Scalar margin, CollisionCoun
   ccd::Candidates all;
   const bool self_pairs = self && model.scene.collisions.self;
   const bool culling = self_pairs && model.scene.collisions.self_culling;
-  // The cloth's btDbvt serves the mesh obstacles, and self-collision without culling.
-  if ((with_obstacles && !obstacles.empty()) || (self_pairs && !culling)) {
-    boxes.resize(cloth_triangles.size());
-    for (std::size_t i = 0; i < cloth_triangles.size(); ++i) boxes[i] = ccd::swept_box(cloth_triangles[i], start, end, margin);
-    cloth_tree.update(boxes);
+  // The tests must involve a vertex of mask: a later round's moved vertices, or a first
+  // round's that may move (a clamped region of cloth resting on a still obstacle made most of
+  // the Cusick drape's triangle pairs, all of them pointless).
+  const std::span<const std::uint8_t> mask = moved.empty() ? movable_vertices() : moved;
+  const auto in_mask = [&](const ccd::TriangleIndices& t) {
+    return mask.empty() || mask[std::size_t(t[0])] || mask[std::size_t(t[1])] || mask[std::size_t(t[2])];
+  };
+  // The cloth's btDbvt serves the mesh obstacles, and self-collision without culling. Serving
+  // only obstacles none of whose vertices is in the mask, it holds only the cloth triangles
+  // with a vertex in it: every test of the others would be dropped (a test's cloth features
+  // belong to their triangle of the pair).
+  const bool cloth_tree_needed = (with_obstacles && !obstacles.empty()) || (self_pairs && !culling);
+  if (cloth_tree_needed) {
+    bool restrict = !mask.empty() && !(self_pairs && !culling);
+    for (std::size_t v = std::size_t(cloth_vertices); v < mask.size() && restrict; ++v) restrict = !mask[v];
+    tree_triangles.clear();
+    for (std::size_t i = 0; i < cloth_triangles.size(); ++i)
+      if (!restrict || in_mask(cloth_triangles[i])) tree_triangles.push_back(std::int32_t(i));
+    boxes.resize(tree_triangles.size());
+    for (std::size_t k = 0; k < tree_triangles.size(); ++k)
+      boxes[k] = ccd::swept_box(cloth_triangles[std::size_t(tree_triangles[k])], start, end, margin);
+    if (!boxes.empty()) cloth_tree.update(boxes);
   }
   bool features_ready = false;
   const auto make_features = [&] {
@@ -113,9 +130,9 @@ ccd::Candidates CollisionPipeline::Impl::candidates(Scalar margin, CollisionCoun
     // Each test once by its features' triangles; without feature volumes (the paper's count,
     // every test of every overlapping pair), every pair's tests, sorted and made unique.
     ccd::Candidates c =
-        features.empty() ? ccd::feature_pairs(cloth_triangles, other, pairs, features, settings.threads, moved)
+        features.empty() ? ccd::feature_pairs(cloth_triangles, other, pairs, features, settings.threads, mask)
                          : ccd::feature_pairs(cloth_triangles, other, pairs, cloth_owners, other_owners, features,
-                                              settings.threads, moved);
+                                              settings.threads, mask);
     all.vertex_face.insert(all.vertex_face.end(), c.vertex_face.begin(), c.vertex_face.end());
     all.edge_edge.insert(all.edge_edge.end(), c.edge_edge.begin(), c.edge_edge.end());
   };
@@ -126,7 +143,7 @@ ccd::Candidates CollisionPipeline::Impl::candidates(Scalar margin, CollisionCoun
     ccd::Candidates orphans;
     const bool owned = model.scene.collisions.feature_boxes;
     append(cloth_triangles, cloth_owners,
-           patch_tree.self_pairs(start, end, margin, settings.threads, &culled, moved, owned ? &orphans : nullptr));
+           patch_tree.self_pairs(start, end, margin, settings.threads, &culled, mask, owned ? &orphans : nullptr));
     counters.culled_triangles += culled.triangles_culled;
     if (!orphans.vertex_face.empty() || !orphans.edge_edge.empty()) {
       make_features();
@@ -138,11 +155,13 @@ ccd::Candidates CollisionPipeline::Impl::candidates(Scalar margin, CollisionCoun
     append(cloth_triangles, cloth_owners, cloth_tree.self_pairs());
   }
   for (MeshObstacle& mo : obstacles) {
-    if (!with_obstacles) break;
+    if (!with_obstacles || tree_triangles.empty()) break;
     std::vector<ccd::Aabb> obstacle_boxes(mo.triangles.size());
     for (std::size_t i = 0; i < mo.triangles.size(); ++i) obstacle_boxes[i] = ccd::swept_box(mo.triangles[i], start, end, margin);
     mo.tree.update(obstacle_boxes);
-    append(mo.triangles, mo.owners, cloth_tree.pairs_with(mo.tree));
+    auto pairs = cloth_tree.pairs_with(mo.tree);
+    for (auto& [cloth, obstacle] : pairs) cloth = tree_triangles[std::size_t(cloth)];  // increasing: still sorted
+    append(mo.triangles, mo.owners, pairs);
   }
   counters.broad_ms += ms_since(begin);
   return all;

@@ -75,6 +75,8 @@ struct CollisionPipeline::Impl {
   std::vector<int> cloth_of_vertex;  // cloth vertices only: the index of their cloth
   std::vector<Vec3> start, end;      // combined positions at t and t + h
   std::vector<ccd::Aabb> boxes;
+  std::vector<std::int32_t> tree_triangles;  // the cloth triangles in cloth_tree, in order
+  std::vector<std::uint8_t> movable;         // per vertex of the combined array (candidates)
   std::vector<ccd::FeatureVolume> features;  // per-vertex swept volumes for feature_pairs (empty: no feature culling)
   ccd::Options options;
   CollisionPipeline::Observer observer;
@@ -87,6 +89,19 @@ struct CollisionPipeline::Impl {
   // moved vertex.
   ccd::Candidates candidates(Scalar margin, CollisionCounters& counters, bool self = true,
                              std::span<const std::uint8_t> moved = {}, bool obstacles = true);
+
+  // Which vertices a first round's test must involve: those free to move or moving over the
+  // step (a handle's, a moving obstacle's). A test of pinned and obstacle vertices that all
+  // stay where they are finds no contact and can answer none. Empty when every vertex may move.
+  std::span<const std::uint8_t> movable_vertices() {
+    movable.resize(start.size());
+    bool every = true;
+    for (std::size_t v = 0; v < start.size(); ++v) {
+      movable[v] = inverse_mass[v] > 0 || start[v] != end[v];
+      every = every && movable[v];
+    }
+    return every ? std::span<const std::uint8_t>{} : std::span<const std::uint8_t>(movable);
+  }
 
   // The mesh obstacles' vertices at t (start) and t + h (end).
   void pose_obstacles(Scalar t, Scalar h) {
