@@ -11,6 +11,8 @@
 #include <cmath>
 #include <tuple>
 
+#include "sorted_pairs.h"
+
 namespace drape::ccd {
 
 namespace {
@@ -124,14 +126,14 @@ std::vector<std::pair<std::int32_t, std::int32_t>> BoxTree::self_pairs() const {
   PairCollector collector;
   collector.self = true;
   impl_->tree.collideTT(impl_->tree.m_root, impl_->tree.m_root, collector);
-  std::sort(collector.pairs.begin(), collector.pairs.end());
+  sort_pairs(collector.pairs);
   return std::move(collector.pairs);
 }
 
 std::vector<std::pair<std::int32_t, std::int32_t>> BoxTree::pairs_with(const BoxTree& other) const {
   PairCollector collector;
   impl_->tree.collideTT(impl_->tree.m_root, other.impl_->tree.m_root, collector);
-  std::sort(collector.pairs.begin(), collector.pairs.end());
+  sort_pairs(collector.pairs);
   return std::move(collector.pairs);
 }
 

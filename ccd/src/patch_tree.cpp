@@ -11,6 +11,8 @@
 #include <numeric>
 #include <tuple>
 
+#include "sorted_pairs.h"
+
 namespace drape::ccd {
 
 namespace {
@@ -280,7 +282,7 @@ std::vector<std::pair<std::int32_t, std::int32_t>> PatchTree::self_pairs(std::sp
       local += task_counters[k];
     }
   }
-  std::sort(out.begin(), out.end());
+  sort_pairs(out);
   if (orphans) {
     // The reached nodes' orphans, in node order, those with a moved vertex when restricted.
     const auto any_moved = [&](std::initializer_list<std::int32_t> vertices) {

@@ -95,21 +95,23 @@ ccd::Candidates CollisionPipeline::Impl::candidates(Scalar margin, CollisionCoun
   // The tests must involve a vertex of mask: a later round's moved vertices, or a first
   // round's that may move (a clamped region of cloth resting on a still obstacle made most of
   // the Cusick drape's triangle pairs, all of them pointless).
-  const std::span<const std::uint8_t> mask = moved.empty() ? movable_vertices() : moved;
-  const auto in_mask = [&](const ccd::TriangleIndices& t) {
-    return mask.empty() || mask[std::size_t(t[0])] || mask[std::size_t(t[1])] || mask[std::size_t(t[2])];
-  };
+  const std::span<const std::uint8_t> movable = movable_vertices();
+  const std::span<const std::uint8_t> mask = moved.empty() ? movable : moved;
   // The cloth's btDbvt serves the mesh obstacles, and self-collision without culling. Serving
-  // only obstacles none of whose vertices is in the mask, it holds only the cloth triangles
-  // with a vertex in it: every test of the others would be dropped (a test's cloth features
-  // belong to their triangle of the pair).
+  // only still obstacles, it holds only the cloth triangles with a movable vertex: every test
+  // of the others would be dropped (a test's cloth features belong to their triangle of the
+  // pair, and a moved vertex is a movable one). Not narrowed to a later round's moved
+  // vertices: a change of its triangles rebuilds the tree, which cost more than the pairs.
   const bool cloth_tree_needed = (with_obstacles && !obstacles.empty()) || (self_pairs && !culling);
   if (cloth_tree_needed) {
-    bool restrict = !mask.empty() && !(self_pairs && !culling);
-    for (std::size_t v = std::size_t(cloth_vertices); v < mask.size() && restrict; ++v) restrict = !mask[v];
+    bool restrict = !movable.empty() && !(self_pairs && !culling);
+    for (std::size_t v = std::size_t(cloth_vertices); v < movable.size() && restrict; ++v) restrict = !movable[v];
     tree_triangles.clear();
-    for (std::size_t i = 0; i < cloth_triangles.size(); ++i)
-      if (!restrict || in_mask(cloth_triangles[i])) tree_triangles.push_back(std::int32_t(i));
+    for (std::size_t i = 0; i < cloth_triangles.size(); ++i) {
+      const ccd::TriangleIndices& t = cloth_triangles[i];
+      if (!restrict || movable[std::size_t(t[0])] || movable[std::size_t(t[1])] || movable[std::size_t(t[2])])
+        tree_triangles.push_back(std::int32_t(i));
+    }
     boxes.resize(tree_triangles.size());
     for (std::size_t k = 0; k < tree_triangles.size(); ++k)
       boxes[k] = ccd::swept_box(cloth_triangles[std::size_t(tree_triangles[k])], start, end, margin);
