@@ -1,11 +1,13 @@
 // The btDbvt broad phase and the candidate tests generated from triangle pairs.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <random>
 #include <set>
 
 #include "drape/ccd/broad_phase.h"
+#include "sorted_pairs.h"
 
 using namespace drape;
 using namespace drape::ccd;
@@ -191,4 +193,20 @@ TEST(FeaturePairs, FeatureVolumesSeparateTheFarCornerOfAQuad) {
   // A box would keep them: vertex 3 lies on the corner of triangle 0's box.
   const Aabb box = swept_box(tris[0], corners, corners, 0.004);
   EXPECT_TRUE((corners[3].array() >= box.min.array()).all() && (corners[3].array() <= box.max.array()).all());
+}
+
+TEST(BroadPhase, SortedPairsComeInStdSortsOrder) {
+  // The counting sort of the trees' pairs, below and above its threshold, with repeats and
+  // first indices spread or bunched: std::sort's order exactly.
+  std::mt19937 random(7);
+  for (const std::size_t count : {std::size_t(10), ccd::COUNTING_SORT_PAIRS - 1, ccd::COUNTING_SORT_PAIRS, std::size_t(50000)})
+    for (const int firsts : {3, 1000, 100000}) {
+      std::uniform_int_distribution<std::int32_t> first(0, firsts - 1), second(0, 5000);
+      std::vector<std::pair<std::int32_t, std::int32_t>> pairs(count);
+      for (auto& p : pairs) p = {first(random), second(random)};
+      auto expected = pairs;
+      std::sort(expected.begin(), expected.end());
+      ccd::sort_pairs(pairs);
+      EXPECT_EQ(pairs, expected) << count << " pairs, " << firsts << " first indices";
+    }
 }
