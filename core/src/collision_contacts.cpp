@@ -67,8 +67,8 @@ std::vector<SolveContact> CollisionPipeline::mesh_contacts(const std::vector<Vec
       contact.vertex = {p.vertex, -1, -1, -1};
       contact.weight = {1, 0, 0, 0};
       add(contact, x[p.vertex] - closest.point, wa * velocity(f[0]) + wb * velocity(f[1]) + wc * velocity(f[2]));
-    } else if (p.vertex >= m.cloth_vertices && free(f[0]) && free(f[1]) && free(f[2]) && inner(wa) && inner(wb) &&
-               inner(wc)) {  // an obstacle's vertex and a cloth triangle
+    } else if (p.vertex >= m.cloth_vertices && (free(f[0]) || free(f[1]) || free(f[2])) && inner(wa) && inner(wb) &&
+               inner(wc)) {  // an obstacle's vertex and a cloth triangle (pinned corners allowed)
       contact.vertex = {f[0], f[1], f[2], -1};
       contact.weight = {wa, wb, wc, 0};
       contact.count = 3;
@@ -76,7 +76,7 @@ std::vector<SolveContact> CollisionPipeline::mesh_contacts(const std::vector<Vec
     }
   }
   for (const auto& p : c.edge_edge) {  // edge_a is the cloth's (its indices are the smaller)
-    if (!free(p.edge_a[0]) || !free(p.edge_a[1])) continue;
+    if (!free(p.edge_a[0]) && !free(p.edge_a[1])) continue;  // a pinned end allowed
     const auto closest = ccd::closest_segment_segment<Scalar>(x[p.edge_a[0]], x[p.edge_a[1]], x[p.edge_b[0]], x[p.edge_b[1]]);
     if (!inner(closest.s) || !inner(closest.u)) continue;  // a vertex's contact, found as such
     SolveContact contact;
@@ -86,8 +86,9 @@ std::vector<SolveContact> CollisionPipeline::mesh_contacts(const std::vector<Vec
     add(contact, closest.point_a - closest.point_b,
         (1 - closest.u) * velocity(p.edge_b[0]) + closest.u * velocity(p.edge_b[1]));
   }
-  // An edge's or triangle's contact whose every vertex has its own contact in that direction
-  // would over-determine the solve (penalties with different targets fighting): dropped.
+  // An edge's or triangle's contact whose every free vertex has its own contact in that
+  // direction (a pinned one holds itself) would over-determine the solve (penalties with
+  // different targets fighting): dropped.
   std::map<int, std::vector<Vec3>> vertex_normals;
   for (const auto& [key, list] : near)
     for (const auto& [d, contact] : list)
@@ -101,7 +102,7 @@ std::vector<SolveContact> CollisionPipeline::mesh_contacts(const std::vector<Vec
   for (const auto& [key, list] : near)
     for (const auto& [d, contact] : list) {
       bool covered = contact.count > 1;
-      for (int i = 0; i < contact.count && covered; ++i) covered = has_own(contact.vertex[i], contact.normal);
+      for (int i = 0; i < contact.count && covered; ++i) covered = !free(contact.vertex[i]) || has_own(contact.vertex[i], contact.normal);
       if (!covered) out.push_back(contact);
     }
   return out;

@@ -197,7 +197,7 @@ StepReport Integrator::advance(State& state) {
     air_forces = w.forces;
     for (int v = 0; v < n; ++v) air_forces[v] -= m.masses[v] * m.scene.gravity;
   }
-  if (m.scene.solver.kind == SolverKind::Cholmod || (projective_ && m.scene.solver.history > 0)) find_contacts(state, report);
+  if (m.scene.solver.kind == SolverKind::Cholmod || (projective_ && m.scene.solver.history > 0)) find_contacts(state, pinned_dv, report);
   else w.contacts.clear();
   if (!(projective_ ? solve_projective(state, pinned_dv, report) : solve_linearised(state, pinned_dv, report)))
     return report;
@@ -331,7 +331,7 @@ void add_sphere_face_contacts(const Model& m, const PosedShape& shape, Scalar t,
 
 }  // namespace
 
-void Integrator::find_contacts(const State& state, StepReport& report) {
+void Integrator::find_contacts(const State& state, const std::vector<Vec3>& pinned_dv, StepReport& report) {
   const Model& m = model_;
   Workspace& w = *work_;
   const Scalar h = h_;
@@ -358,7 +358,27 @@ void Integrator::find_contacts(const State& state, StepReport& report) {
     if (shape.sphere) add_sphere_face_contacts(m, shape, state.time, state.positions, w.free_index, reach, w.contacts);
   }
   if (collisions_ && m.scene.collisions.obstacles) {
-    const auto mesh = collisions_->mesh_contacts(state.positions, state.time, h, reach, report.collisions);
+    auto mesh = collisions_->mesh_contacts(state.positions, state.time, h, reach, report.collisions);
+    // A cloth edge's or triangle's contact may have pinned corners (a clamp's rim over a
+    // support's edge). The linearised solve holds its free ones; the pinned ones' part of the
+    // relative velocity, their velocity at the step's end, is known and moves the target. (The
+    // projective solver keeps them: its iterate holds the pinned vertices where they go.)
+    // Left to the response, the Cusick drape's ring of free vertices next to its clamp sank
+    // over the support's rim in every solve and was stopped and spread every step.
+    for (SolveContact& c : mesh) {
+      if (projective_) break;
+      int kept = 0;
+      for (int i = 0; i < c.count; ++i) {
+        const int v = c.vertex[i];
+        if (w.free_index[std::size_t(v)] >= 0) {
+          c.vertex[kept] = v, c.weight[kept] = c.weight[i], ++kept;
+        } else {
+          c.target -= c.weight[i] * c.normal.dot(state.velocities[std::size_t(v)] + pinned_dv[std::size_t(v)]);
+        }
+      }
+      for (int i = kept; i < 4; ++i) c.vertex[i] = -1, c.weight[i] = 0;
+      c.count = kept;
+    }
     w.contacts.insert(w.contacts.end(), mesh.begin(), mesh.end());
   }
   if (projective_) return;  // its contacts are terms of its objective, not blocks of a matrix

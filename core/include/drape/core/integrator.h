@@ -120,7 +120,7 @@ class Integrator {
   // The contacts of the free cloth vertices with the obstacles at the state (the workspace's
   // contacts), for the linearised solve to hold; with self-collision and the linearised solver,
   // the cloth's contacts with itself too (their broad phase counted in report).
-  void find_contacts(const State& state, StepReport& report);
+  void find_contacts(const State& state, const std::vector<Vec3>& pinned_dv, StepReport& report);
   // The system matrix's pattern (the workspace's): the free vertices' diagonal blocks, the
   // blocks the springs and hinges join, and extra pairs (a, b) of free vertices, a < b,
   // unique (both blocks); the offsets of the springs' and hinges' blocks found again.
