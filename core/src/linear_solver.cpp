@@ -332,7 +332,9 @@ bool CholmodFactor::factorise(const SparseMatrix& A) {
     }
     if (f.L && f.L->is_super) f.number_permuted(A);
     ++f.analyses;
-    f.remember_pattern(A);
+    // A failed analysis (CHOLMOD out of memory) is not kept: the next matrix is analysed again.
+    if (f.L && (!f.L->is_super || f.permuted)) f.remember_pattern(A);
+    else f.rows = -1;
   }
   ++f.factorisations;
   f.factorised = f.numeric(A);
