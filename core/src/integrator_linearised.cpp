@@ -10,6 +10,10 @@ namespace drape {
 
 namespace {
 
+// A contact's weights summing to within this of 1 are a whole contact's (edge and triangle
+// weights are 1 - s + s and 1 - b - c + b + c, rounded).
+constexpr Scalar WHOLE_SHARE = 1e-12;
+
 // Lagged Coulomb friction's terms in the solve, for a slip (speed its length) across a contact
 // (across: the projection off its normal) under a normal force: where it could stop the slip
 // within the step (stops), an implicit drag reaching the force at the slip speed (or at
@@ -331,8 +335,14 @@ bool Integrator::solve_linearised(State& state, const std::vector<Vec3>& pinned_
   // The work the held contacts did on the cloth at moving obstacles' velocities (their normal
   // impulses and their friction), for the step's energy ledger: zero on still obstacles.
   w.contact_work = 0;
-  for (std::size_t k = 0; k < w.contacts.size(); ++k)
-    w.contact_work += w.contact_impulses[k] * w.contacts[k].normal.dot(w.contacts[k].surface_velocity);
+  for (std::size_t k = 0; k < w.contacts.size(); ++k) {
+    // The impulse reaches the cloth by its vertices' weights: all of it, but for a mesh
+    // contact whose pinned corners were folded out (find_contacts), whose share they take.
+    Scalar share = 0;
+    for (int i = 0; i < w.contacts[k].count; ++i) share += w.contacts[k].weight[i];
+    if (std::abs(share - 1) < WHOLE_SHARE) share = 1;  // a whole contact's weights, summed with rounding
+    w.contact_work += share * w.contact_impulses[k] * w.contacts[k].normal.dot(w.contacts[k].surface_velocity);
+  }
   for (const Friction& f : frictions)
     w.contact_work += (f.pushed - f.block * w.solution.segment<3>(3 * w.free_index[std::size_t(f.vertex)])).dot(f.surface);
   w.contact_work = std::max<Scalar>(0, w.contact_work);

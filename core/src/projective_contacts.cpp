@@ -98,13 +98,18 @@ Scalar ProjectiveSolver::contact_terms(const std::vector<Vec3>& x, std::vector<V
     if (!(depth > 0)) continue;
     const Scalar stiffness = contact_stiffness_[k];
     total += 0.5 * stiffness * depth * depth;
+    Scalar free_share = 0;  // of the push that reaches free vertices (a mesh contact may have pinned corners)
+    bool pinned = false;
     for (int i = 0; i < contact.count; ++i) {
       const std::size_t v = std::size_t(contact.vertex[i]);
       const int a = free_index_[v];
       if (gradient && a >= 0) (*gradient)[std::size_t(a)] -= contact.weight[i] * stiffness * depth * contact.normal;
       if (impulses) contact_impulse_[v] += contact.weight[i] * stiffness * depth / h;
+      if (a >= 0) free_share += contact.weight[i];
+      else pinned = true;
     }
-    if (impulses) contact_work_ += stiffness * depth / h * contact.normal.dot(contact.surface_velocity);
+    if (!pinned) free_share = 1;  // the whole push, as the weights sum to 1 up to rounding
+    if (impulses) contact_work_ += free_share * stiffness * depth / h * contact.normal.dot(contact.surface_velocity);
   }
   // Friction: Coulomb's force against the slip u over the step, smoothed below the sticking
   // speed (the lagged friction potential of Li et al., "Incremental potential contact", 2020,
