@@ -78,6 +78,11 @@ CollisionPipeline::Impl::Impl(const Model& m, const CollisionSettings& s) : mode
     for (int v = 0; v < m.cloths[c].vertex_count; ++v) cloth_of_vertex[std::size_t(m.cloths[c].first_vertex + v)] = int(c);
   for (int v = 0; v < cloth_vertices; ++v)
     if (m.pin_of_vertex[v] < 0) inverse_mass[v] = 1.0 / m.masses[v];
+  may_move.assign(std::size_t(cloth_vertices), 0);
+  for (int v = 0; v < cloth_vertices; ++v) {
+    const int pin = m.pin_of_vertex[v];
+    may_move[std::size_t(v)] = pin < 0 || m.scene.handles[std::size_t(m.pins[std::size_t(pin)].handle)].motion.moves();
+  }
   start.resize(offset);
   end.resize(offset);
   if (m.scene.collisions.self && m.scene.collisions.self_culling) patch_tree = ccd::PatchTree(cloth_triangles, m.initial_positions);
@@ -98,9 +103,9 @@ ccd::Candidates CollisionPipeline::Impl::candidates(Scalar margin, CollisionCoun
   const std::span<const std::uint8_t> movable = movable_vertices();
   const std::span<const std::uint8_t> mask = moved.empty() ? movable : moved;
   // The cloth's btDbvt serves the mesh obstacles, and self-collision without culling. Serving
-  // only still obstacles, it holds only the cloth triangles with a movable vertex: every test
-  // of the others would be dropped (a test's cloth features belong to their triangle of the
-  // pair, and a moved vertex is a movable one). Not narrowed to a later round's moved
+  // only still obstacles, it holds only the cloth triangles with a vertex that may move (free,
+  // or a moving handle's) or moves: every test of the others would be dropped (a test's cloth
+  // features belong to their triangle of the pair). Not narrowed to a round's movable or moved
   // vertices: a change of its triangles rebuilds the tree, which cost more than the pairs.
   const bool cloth_tree_needed = (with_obstacles && !obstacles.empty()) || (self_pairs && !culling);
   if (cloth_tree_needed) {
@@ -109,8 +114,9 @@ ccd::Candidates CollisionPipeline::Impl::candidates(Scalar margin, CollisionCoun
     tree_triangles.clear();
     for (std::size_t i = 0; i < cloth_triangles.size(); ++i) {
       const ccd::TriangleIndices& t = cloth_triangles[i];
-      if (!restrict || movable[std::size_t(t[0])] || movable[std::size_t(t[1])] || movable[std::size_t(t[2])])
-        tree_triangles.push_back(std::int32_t(i));
+      bool keep = !restrict;
+      for (int k = 0; k < 3 && !keep; ++k) keep = may_move[std::size_t(t[k])] || movable[std::size_t(t[k])];
+      if (keep) tree_triangles.push_back(std::int32_t(i));
     }
     boxes.resize(tree_triangles.size());
     for (std::size_t k = 0; k < tree_triangles.size(); ++k)

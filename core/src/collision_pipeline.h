@@ -77,6 +77,11 @@ struct CollisionPipeline::Impl {
   std::vector<ccd::Aabb> boxes;
   std::vector<std::int32_t> tree_triangles;  // the cloth triangles in cloth_tree, in order
   std::vector<std::uint8_t> movable;         // per vertex of the combined array (candidates)
+  // Per cloth vertex: free, or pinned by a handle that moves at some time. The cloth's tree
+  // against still obstacles holds the triangles with such a vertex: the same set in every
+  // call (a step's first round sees a moving handle's vertices move, the solve's contact
+  // search does not), so the tree is refitted, not rebuilt.
+  std::vector<std::uint8_t> may_move;
   std::vector<ccd::FeatureVolume> features;  // per-vertex swept volumes for feature_pairs (empty: no feature culling)
   ccd::Options options;
   CollisionPipeline::Observer observer;
