@@ -365,19 +365,20 @@ void Integrator::find_contacts(const State& state, const std::vector<Vec3>& pinn
     // projective solver keeps them: its iterate holds the pinned vertices where they go.)
     // Left to the response, the Cusick drape's ring of free vertices next to its clamp sank
     // over the support's rim in every solve and was stopped and spread every step.
-    for (SolveContact& c : mesh) {
-      if (projective_) break;
-      int kept = 0;
-      for (int i = 0; i < c.count; ++i) {
-        const int v = c.vertex[i];
-        if (w.free_index[std::size_t(v)] >= 0) {
-          c.vertex[kept] = v, c.weight[kept] = c.weight[i], ++kept;
-        } else {
-          c.target -= c.weight[i] * c.normal.dot(state.velocities[std::size_t(v)] + pinned_dv[std::size_t(v)]);
+    if (!projective_) {
+      for (SolveContact& c : mesh) {
+        int kept = 0;
+        for (int i = 0; i < c.count; ++i) {
+          const int v = c.vertex[i];
+          if (w.free_index[std::size_t(v)] >= 0) {
+            c.vertex[kept] = v, c.weight[kept] = c.weight[i], ++kept;
+          } else {
+            c.target -= c.weight[i] * c.normal.dot(state.velocities[std::size_t(v)] + pinned_dv[std::size_t(v)]);
+          }
         }
+        for (int i = kept; i < 4; ++i) c.vertex[i] = -1, c.weight[i] = 0;
+        c.count = kept;
       }
-      for (int i = kept; i < 4; ++i) c.vertex[i] = -1, c.weight[i] = 0;
-      c.count = kept;
     }
     w.contacts.insert(w.contacts.end(), mesh.begin(), mesh.end());
   }

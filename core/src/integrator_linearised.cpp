@@ -251,6 +251,11 @@ bool Integrator::solve_linearised(State& state, const std::vector<Vec3>& pinned_
   std::vector<Vec3> layers_push(static_cast<std::size_t>(n));  // per vertex: the held layers' contacts' push
   std::vector<char> released_now(w.contacts.size(), 0);         // released by a solve again of this step
   bool last_release = false;  // the moving obstacles' pulls left by the solves again, released
+  // Whether the last solve closes contact k's sides by more than a negligible distance.
+  const auto closes = [&](std::size_t k) {
+    return h * (w.contacts[k].target - normal_velocity(w.contacts[k], &w.solution)) >
+           NEGLIGIBLE_MOTION * m.scene.collisions.thickness;
+  };
   for (int attempt = 0;; ++attempt) {
     if (!solve(report, "the linear solver failed: ")) return false;
     for (std::size_t k = 0; k < w.contacts.size(); ++k)
@@ -289,9 +294,7 @@ bool Integrator::solve_linearised(State& state, const std::vector<Vec3>& pinned_
     // some pulls moves the load onto others, and a pair let go may then close).
     std::vector<char> closing(w.contacts.size(), 0);
     for (std::size_t k = 0; k < w.contacts.size(); ++k)
-      if (released_now[k] && h * (w.contacts[k].target - normal_velocity(w.contacts[k], &w.solution)) >
-                                 NEGLIGIBLE_MOTION * m.scene.collisions.thickness)
-        closing[k] = 1, again = true;
+      if (released_now[k] && closes(k)) closing[k] = 1, again = true;
     // Pulling, they are not held by the response's spread either (contact_held).
     for (std::size_t k = 0; k < w.contacts.size(); ++k)
       if (pulling[k]) held[k] = 0, released_now[k] = 1;
@@ -327,9 +330,7 @@ bool Integrator::solve_linearised(State& state, const std::vector<Vec3>& pinned_
   // in every later solve (nothing held it), the response stopped it, and every step of the
   // pile's frames 6-24 spread that stop through a second factorisation.
   for (std::size_t k = 0; k < w.contacts.size(); ++k)
-    if (released_before[k] && !held[k] &&
-        !(h * (w.contacts[k].target - normal_velocity(w.contacts[k], &w.solution)) > NEGLIGIBLE_MOTION * m.scene.collisions.thickness))
-      w.lagged.released.emplace_back(contact_key(w.contacts[k]), w.contacts[k].normal);
+    if (released_before[k] && !held[k] && !closes(k)) w.lagged.released.emplace_back(contact_key(w.contacts[k]), w.contacts[k].normal);
   std::sort(w.lagged.released.begin(), w.lagged.released.end(), [](const auto& x, const auto& y) { return x.first < y.first; });
   w.contact_held = held;
   // The work the held contacts did on the cloth at moving obstacles' velocities (their normal
