@@ -14,7 +14,9 @@ disc_30cm_cells_12mm_turned30.obj and disc_30cm_cells_turned30.obj the first two
 degrees about their axis (a cloth's warp is its x axis: their edges no longer follow it; the
 membrane's locking in docs/materials.md).
 cusick_support.obj: an 18 cm disc support, a closed cylinder of radius 0.09 m and height 0.3 m
-standing on z = 0 (64 segments around). table.obj: a table, a top 1.2 x 0.8 x 0.04 m at 0.75 m and
+standing on z = 0 (64 segments around); cusick_clamp.obj: the top 18 cm disc that clamps the
+specimen onto it, a closed cylinder of radius 0.09 m and height 0.02 m on z = 0, which the scene
+lifts to two thicknesses above the support. table.obj: a table, a top 1.2 x 0.8 x 0.04 m at 0.75 m and
 four legs 0.05 x 0.05 m under it, each a separate closed box of 4x4 quads a face (the table-like
 mesh obstacle of issue 19's tablecloth)."""
 import math, os
@@ -251,5 +253,7 @@ if __name__ == "__main__":  # bench/user_scenes/make_meshes.py imports write
               "30 cm disc of a square grid's half cells %g mm apart turned 30 degrees (tools/make_meshes.py)" % (spacing * 1000))
     write(os.path.join(here, "cusick_support.obj"), *cylinder(0.09, 0.3, 64, 4),
           "18 cm support: cylinder r 0.09 m, h 0.3 m on z = 0 (tools/make_meshes.py)")
+    write(os.path.join(here, "cusick_clamp.obj"), *cylinder(0.09, 0.02, 64, 4),
+          "18 cm clamp disc: cylinder r 0.09 m, h 0.02 m on z = 0 (tools/make_meshes.py)")
     write(os.path.join(here, "table.obj"), *table(),
           "table: top 1.2 x 0.8 x 0.04 m at 0.75 m, four 0.05 m legs, separate boxes (tools/make_meshes.py)")
