@@ -67,12 +67,40 @@ std::vector<SolveContact> CollisionPipeline::mesh_contacts(const std::vector<Vec
       contact.vertex = {p.vertex, -1, -1, -1};
       contact.weight = {1, 0, 0, 0};
       add(contact, x[p.vertex] - closest.point, wa * velocity(f[0]) + wb * velocity(f[1]) + wc * velocity(f[2]));
-    } else if (p.vertex >= m.cloth_vertices && (free(f[0]) || free(f[1]) || free(f[2])) && inner(wa) && inner(wb) &&
-               inner(wc)) {  // an obstacle's vertex and a cloth triangle (pinned corners allowed)
-      contact.vertex = {f[0], f[1], f[2], -1};
-      contact.weight = {wa, wb, wc, 0};
-      contact.count = 3;
-      add(contact, closest.point - x[p.vertex], velocity(p.vertex));
+    } else if (p.vertex >= m.cloth_vertices && (free(f[0]) || free(f[1]) || free(f[2]))) {
+      // An obstacle's vertex and a cloth triangle (pinned corners allowed), its closest point
+      // inside the triangle; or on one of its edges, inside the edge, the vertex over it along
+      // the triangle's normal: that edge's contact (the triangles on both sides find the same
+      // one). An obstacle's vertex over a cloth edge
+      // is no edge-edge contact either (the obstacle's closest point is its edges' end): the
+      // support's rim vertices over the edges of a grid cut along its axes were left to the
+      // response, which stopped that edge in every step.
+      const std::array<Scalar, 3> w{wa, wb, wc};
+      const int on_rim = int(!inner(wa)) + int(!inner(wb)) + int(!inner(wc));
+      if (on_rim == 0) {
+        contact.vertex = {f[0], f[1], f[2], -1};
+        contact.weight = {wa, wb, wc, 0};
+        contact.count = 3;
+        add(contact, closest.point - x[p.vertex], velocity(p.vertex));
+      } else if (on_rim == 1) {
+        int k = 0;  // the corner off the edge
+        while (inner(w[std::size_t(k)])) ++k;
+        const int a = f[std::size_t((k + 1) % 3)], b = f[std::size_t((k + 2) % 3)];
+        const Scalar wa_edge = w[std::size_t((k + 1) % 3)], wb_edge = w[std::size_t((k + 2) % 3)];
+        const Vec3 across = (x[f[1]] - x[f[0]]).cross(x[f[2]] - x[f[0]]);
+        const Vec3 offset = closest.point - x[p.vertex];
+        // Only a vertex over the edge, along the triangle's normal: one beside it, in or near
+        // the cloth's plane, is no contact the triangle's side can hold.
+        const bool over = std::abs(across.dot(offset)) > SAME_DIRECTION * across.norm() * offset.norm();
+        if ((free(a) || free(b)) && over) {
+          const bool ordered = a < b;  // one key for the edge from either triangle
+          contact.vertex = {ordered ? a : b, ordered ? b : a, -1, -1};
+          const Scalar sum = wa_edge + wb_edge;
+          contact.weight = {(ordered ? wa_edge : wb_edge) / sum, (ordered ? wb_edge : wa_edge) / sum, 0, 0};
+          contact.count = 2;
+          add(contact, closest.point - x[p.vertex], velocity(p.vertex));
+        }
+      }
     }
   }
   for (const auto& p : c.edge_edge) {  // edge_a is the cloth's (its indices are the smaller)

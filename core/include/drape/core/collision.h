@@ -74,7 +74,8 @@ std::string thickness_note(const Model& model);
 constexpr Scalar SAME_DIRECTION = 0.95;
 /// An edge's or face's contact of the implicit solve is kept only where its closest point lies
 /// inside the feature (each of its weights, and the obstacle feature's, above this);
-/// otherwise it is a vertex's contact, found as such.
+/// otherwise it is a vertex's contact, found as such, or, for an obstacle's vertex closest to a
+/// cloth triangle's edge, that edge's.
 constexpr Scalar INNER_WEIGHT = 0.01;
 
 /// Two cloth edges are a contact of the implicit solve only when the sine of their angle is at
