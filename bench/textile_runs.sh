@@ -30,8 +30,10 @@
 # THICKNESS=M (metres) for the Cusick runs' collision thickness in place of the scene's default
 # 5 mm, the cloth and its clamp moved to rest on the support at it (the coefficient follows the
 # thickness: docs/benchmarks.md, session 31),
-# SPECIMENS=K for K specimens a resolution in place of one: the disc and its clamp tilted by TILT degrees (0.5)
-# about a level axis at K azimuths 360/K apart, as a specimen is never laid perfectly level; a
+# SPECIMENS=K for K specimens a resolution in place of one: the apparatus (support, clamp and
+# disc) tilted by TILT degrees (0.5) about a level axis at K azimuths 360/K apart, as it is never
+# set perfectly level (gravity turned the other way, so the clamp and the support stay parallel
+# to the disc; the shadow is cast along it); a
 # limp fabric's single run can land on one of several fold patterns (docs/benchmarks.md), so
 # the table then gives the specimens' mean coefficient, its spread (largest - smallest) and
 # their nodes, and the changes of the means (about K times as long).
@@ -49,9 +51,9 @@ mkdir -p "$OUT"
 failed=0
 
 # A shipped scene ($1) with another preset ($2) and its meshes' paths made absolute; for the
-# Cusick scene, the disc's mesh is $3, given $4, the disc and its clamp are tilted by TILT degrees
-# about a level axis at azimuth $4 degrees (the scene's cloth and clamp transforms must be the
-# ones matched here),
+# Cusick scene, the disc's mesh is $3, given $4, the apparatus is tilted by TILT degrees about a
+# level axis at azimuth $4 degrees, by gravity turned by -TILT about it (the scene's gravity must
+# be the one matched here),
 # and given $5, the run is $5 frames long.
 scene_with() {
   local tilt="" thickness=""
@@ -65,11 +67,12 @@ scene_with() {
     thickness='s|"collisions": \{"self": true, "obstacles": true\}|"collisions": {"self": true, "obstacles": true, "thickness": '"$THICKNESS"'}|;s|\[0, 0, 0\.305\]|[0, 0, '"$height"']|g;s|\[0, 0, 0\.31\]|[0, 0, '"$clamp"']|'
   fi
   if [ -n "${4:-}" ]; then
-    tilt=$(awk -v t="$TILT" -v a="$4" 'BEGIN { r = a * atan2(0, -1) / 180; printf "\"rotate\": [%s, %.9f, %.9f, 0], ", t, cos(r), sin(r) }')
+    # Rodrigues' rotation of (0, 0, -g) by -TILT about (cos a, sin a, 0).
+    tilt=$(awk -v t="$TILT" -v a="$4" 'BEGIN { pi = atan2(0, -1); r = a * pi / 180; t = t * pi / 180; g = 9.81
+      printf "\"gravity\": [%.12g, %.12g, %.12g],", g * sin(r) * sin(t), -g * cos(r) * sin(t), -g * cos(t) }')
   fi
   sed -E -e "s/\"preset\": \"[a-z0-9-]+\"/\"preset\": \"$2\"${COMPRESSION:+, \"compression\": $COMPRESSION}${MEMBRANE:+${3:+, \"membrane\": \"$MEMBRANE\"}}/" -e "s|meshes/disc_30cm\.obj|meshes/${3:-disc_30cm.obj}|" \
-    -e "s|\"transform\": \{\"translate\": \[0, 0, 0.305\]\}|\"transform\": {$tilt\"translate\": [0, 0, 0.305]}|" \
-    -e "s|\"transform\": \{\"translate\": \[0, 0, 0.31\]\}|\"transform\": {$tilt\"translate\": [0, 0, 0.31]}|" \
+    -e "${tilt:+s|^  \"gravity\": \[0, 0, -9.81\],|  $tilt|}" \
     -e "${5:+s|^  \"frames\": [0-9]+,|  \"frames\": $5,|}" \
     -e "$thickness" \
     -e "s|\"mesh\": \"meshes/|\"mesh\": \"$ROOT/scenes/meshes/|" "scenes/$1.json"
@@ -124,8 +127,8 @@ for preset in $PRESETS; do
         azimuth=$(awk -v k="$k" -v n="$SPECIMENS" 'BEGIN { printf "%g", 360 * k / n }')
       fi
       scene_with cusick_drape "$preset" "$mesh" "$azimuth" "$FRAMES" > "$run.json"
-      if [ -n "$azimuth" ] && [ "$(grep -o '"rotate"' "$run.json" | wc -l)" -ne 2 ]; then
-        echo "textile_runs.sh: scenes/cusick_drape.json's cloth and clamp transforms are not the ones this script tilts" >&2
+      if [ -n "$azimuth" ] && grep -q '"gravity": \[0, 0, -9.81\]' "$run.json"; then
+        echo "textile_runs.sh: scenes/cusick_drape.json's gravity is not the one this script tilts" >&2
         exit 2
       fi
       if ! "$DRAPE" run "$run.json" --check --quiet --overwrite --out "$run"; then
