@@ -69,12 +69,12 @@ std::vector<SolveContact> CollisionPipeline::mesh_contacts(const std::vector<Vec
       add(contact, x[p.vertex] - closest.point, wa * velocity(f[0]) + wb * velocity(f[1]) + wc * velocity(f[2]));
     } else if (p.vertex >= m.cloth_vertices && (free(f[0]) || free(f[1]) || free(f[2]))) {
       // An obstacle's vertex and a cloth triangle (pinned corners allowed), its closest point
-      // inside the triangle; or on one of its edges, inside the edge, the vertex over it along
-      // the triangle's normal: that edge's contact (the triangles on both sides find the same
-      // one). An obstacle's vertex over a cloth edge
-      // is no edge-edge contact either (the obstacle's closest point is its edges' end): the
-      // support's rim vertices over the edges of a grid cut along its axes were left to the
-      // response, which stopped that edge in every step.
+      // inside the triangle; or its projection on the triangle's plane within INNER_WEIGHT of
+      // an edge, inside the edge: that edge's contact, which the triangles on both sides find
+      // alike (beyond INNER_WEIGHT on either side, that side's triangle holds it). It is no
+      // edge-edge contact either (its closest point is the end of the obstacle's edges): the
+      // support's rim vertices right under the edges of a disc cut from a grid along the
+      // support's axes were left to the response, which stopped those edges in every step.
       const std::array<Scalar, 3> w{wa, wb, wc};
       const int on_rim = int(!inner(wa)) + int(!inner(wb)) + int(!inner(wc));
       if (on_rim == 0) {
@@ -85,18 +85,21 @@ std::vector<SolveContact> CollisionPipeline::mesh_contacts(const std::vector<Vec
       } else if (on_rim == 1) {
         int k = 0;  // the corner off the edge
         while (inner(w[std::size_t(k)])) ++k;
-        const int a = f[std::size_t((k + 1) % 3)], b = f[std::size_t((k + 2) % 3)];
-        const Scalar wa_edge = w[std::size_t((k + 1) % 3)], wb_edge = w[std::size_t((k + 2) % 3)];
+        const std::size_t ia = std::size_t((k + 1) % 3), ib = std::size_t((k + 2) % 3);
+        const int a = f[ia], b = f[ib];
+        // The projection's weight of that corner (signed: negative beyond the edge).
         const Vec3 across = (x[f[1]] - x[f[0]]).cross(x[f[2]] - x[f[0]]);
-        const Vec3 offset = closest.point - x[p.vertex];
-        // Only a vertex over the edge, along the triangle's normal: one beside it, in or near
-        // the cloth's plane, is no contact the triangle's side can hold.
-        const bool over = std::abs(across.dot(offset)) > SAME_DIRECTION * across.norm() * offset.norm();
-        if ((free(a) || free(b)) && over) {
+        const Scalar twice_area = across.norm();
+        Scalar off = 1;
+        if (twice_area > 0) {
+          const Vec3 q = x[p.vertex] - (x[p.vertex] - x[a]).dot(across) / (twice_area * twice_area) * across;
+          off = (x[a] - q).cross(x[b] - q).dot(across) / (twice_area * twice_area);
+        }
+        if ((free(a) || free(b)) && std::abs(off) <= INNER_WEIGHT) {
           const bool ordered = a < b;  // one key for the edge from either triangle
           contact.vertex = {ordered ? a : b, ordered ? b : a, -1, -1};
-          const Scalar sum = wa_edge + wb_edge;
-          contact.weight = {(ordered ? wa_edge : wb_edge) / sum, (ordered ? wb_edge : wa_edge) / sum, 0, 0};
+          const Scalar sum = w[ia] + w[ib];
+          contact.weight = {(ordered ? w[ia] : w[ib]) / sum, (ordered ? w[ib] : w[ia]) / sum, 0, 0};
           contact.count = 2;
           add(contact, closest.point - x[p.vertex], velocity(p.vertex));
         }

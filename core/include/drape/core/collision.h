@@ -115,7 +115,8 @@ class CollisionPipeline {
   /// The contacts of the free cloth with the mesh obstacles at the step's start, within reach:
   /// a cloth vertex and an obstacle's triangle, a cloth edge and an obstacle's edge (each
   /// closest at an inner point of both), an obstacle's vertex and a cloth triangle (closest
-  /// inside it); for each cloth feature the nearest in each distinct direction (a rim gives
+  /// inside it) or a cloth edge (its projection on a triangle's plane on the edge, within
+  /// INNER_WEIGHT); for each cloth feature the nearest in each distinct direction (a rim gives
   /// the top's and the side's). Each may not approach the obstacle within the step. The broad
   /// phase's time and pairs join counters.
   std::vector<SolveContact> mesh_contacts(const std::vector<Vec3>& start, Scalar t, Scalar h, Scalar reach,
