@@ -64,7 +64,7 @@ scene_with() {
     # The top clamp disc rests on the cloth at the thickness.
     local clamp
     clamp=$(awk -v t="$THICKNESS" 'BEGIN { printf "%.9g", 0.3 + 2 * t }')
-    thickness='s|"collisions": \{"self": true, "obstacles": true\}|"collisions": {"self": true, "obstacles": true, "thickness": '"$THICKNESS"'}|;s|\[0, 0, 0\.305\]|[0, 0, '"$height"']|g;s|\[0, 0, 0\.31\]|[0, 0, '"$clamp"']|'
+    thickness='s|"collisions": \{"self": true, "obstacles": true\}|"collisions": {"self": true, "obstacles": true, "thickness": '"$THICKNESS"'}|;/cusick_clamp/!s|\[0, 0, 0\.305\]|[0, 0, '"$height"']|g;/cusick_clamp/s|\[0, 0, 0\.31\]|[0, 0, '"$clamp"']|'
   fi
   if [ -n "${4:-}" ]; then
     # Rodrigues' rotation of (0, 0, -g) by -TILT about (cos a, sin a, 0).
