@@ -36,7 +36,8 @@
 # to the disc; the shadow is cast along it); a
 # limp fabric's single run can land on one of several fold patterns (docs/benchmarks.md), so
 # the table then gives the specimens' mean coefficient, its spread (largest - smallest) and
-# their nodes, and the changes of the means (about K times as long).
+# their nodes, and the changes of the means (about K times as long; at 0.5 degrees most
+# presets' specimens keep the level disc's pattern: docs/benchmarks.md, session 34).
 # FRAMES=N runs each Cusick specimen N frames (the scene's 60, 2 s, by default) and measures it
 # at frame N and at 2N/3: a coefficient that moved by more than 0.01 between them is marked
 # unsettled (a fold can still deepen after 2 s: docs/benchmarks.md, session 31).
