@@ -1,6 +1,7 @@
 #include <algorithm>
 #include <cmath>
 #include <map>
+#include <optional>
 
 #include "collision_pipeline.h"
 #include "drape/ccd/distance.h"
@@ -12,6 +13,27 @@ namespace {
 
 // A closest point's weight inside its feature, not at its rim (INNER_WEIGHT).
 bool inner(Scalar w) { return w > INNER_WEIGHT && w < 1 - INNER_WEIGHT; }
+
+// A point's projection on a triangle's plane: the plane's unit normal (by the corners' order),
+// the point's height over it and the projection's weights of the corners (signed: negative
+// beyond the edge opposite a corner). None for a triangle without area.
+struct PlaneProjection {
+  Vec3 unit;
+  Scalar height;
+  std::array<Scalar, 3> weight;
+};
+std::optional<PlaneProjection> project_on_plane(const Vec3& point, const Vec3& a, const Vec3& b, const Vec3& c) {
+  const Vec3 across = (b - a).cross(c - a);
+  const Scalar twice_area = across.norm();
+  if (!(twice_area > 0)) return std::nullopt;
+  PlaneProjection out;
+  out.unit = across / twice_area;
+  out.height = (point - a).dot(out.unit);
+  const Vec3 q = point - out.height * out.unit;
+  out.weight = {(b - q).cross(c - q).dot(out.unit) / twice_area, (c - q).cross(a - q).dot(out.unit) / twice_area, 0};
+  out.weight[2] = 1 - out.weight[0] - out.weight[1];
+  return out;
+}
 
 }  // namespace
 
@@ -87,15 +109,8 @@ std::vector<SolveContact> CollisionPipeline::mesh_contacts(const std::vector<Vec
         while (inner(w[std::size_t(k)])) ++k;
         const std::size_t ia = std::size_t((k + 1) % 3), ib = std::size_t((k + 2) % 3);
         const int a = f[ia], b = f[ib];
-        // The projection's weight of that corner (signed: negative beyond the edge).
-        const Vec3 across = (x[f[1]] - x[f[0]]).cross(x[f[2]] - x[f[0]]);
-        const Scalar twice_area = across.norm();
-        Scalar off = 1;
-        if (twice_area > 0) {
-          const Vec3 q = x[p.vertex] - (x[p.vertex] - x[a]).dot(across) / (twice_area * twice_area) * across;
-          off = (x[a] - q).cross(x[b] - q).dot(across) / (twice_area * twice_area);
-        }
-        if ((free(a) || free(b)) && std::abs(off) <= INNER_WEIGHT) {
+        const auto projection = project_on_plane(x[p.vertex], x[f[0]], x[f[1]], x[f[2]]);
+        if ((free(a) || free(b)) && projection && std::abs(projection->weight[std::size_t(k)]) <= INNER_WEIGHT) {
           const bool ordered = a < b;  // one key for the edge from either triangle
           contact.vertex = {ordered ? a : b, ordered ? b : a, -1, -1};
           const Scalar sum = w[ia] + w[ib];
@@ -173,15 +188,9 @@ std::vector<SolveContact> CollisionPipeline::self_contacts(const std::vector<Vec
   };
   const auto& x = m.start;
   for (const auto& p : c.vertex_face) {
-    const Vec3 &a = x[p.face[0]], &b = x[p.face[1]], &f = x[p.face[2]];
-    const Vec3 across = (b - a).cross(f - a);
-    const Scalar twice_area = across.norm();
-    if (!(twice_area > 0)) continue;
-    const Vec3 unit = across / twice_area;
-    const Scalar height = (x[p.vertex] - a).dot(unit);
-    const Vec3 q = x[p.vertex] - height * unit;  // the projection
-    std::array<Scalar, 3> w{(b - q).cross(f - q).dot(unit) / twice_area, (f - q).cross(a - q).dot(unit) / twice_area, 0};
-    w[2] = 1 - w[0] - w[1];
+    const auto projection = project_on_plane(x[p.vertex], x[p.face[0]], x[p.face[1]], x[p.face[2]]);
+    if (!projection) continue;
+    std::array<Scalar, 3> w = projection->weight;
     const Scalar inside = *std::min_element(w.begin(), w.end());
     if (!(inside > -INNER_WEIGHT)) continue;
     Scalar sum = 0;
@@ -190,7 +199,7 @@ std::vector<SolveContact> CollisionPipeline::self_contacts(const std::vector<Vec
     Contact contact;
     contact.vertex = {p.vertex, p.face[0], p.face[1], p.face[2]};
     contact.weight = {1, -w[0], -w[1], -w[2]};
-    add(true, contact, height * unit, inside);
+    add(true, contact, projection->height * projection->unit, inside);
   }
   for (const auto& p : c.edge_edge) {
     const auto closest = ccd::closest_segment_segment<Scalar>(x[p.edge_a[0]], x[p.edge_a[1]], x[p.edge_b[0]], x[p.edge_b[1]]);
