@@ -91,9 +91,15 @@ CollisionPipeline::Impl::Impl(const Model& m, const CollisionSettings& s) : mode
   options.thickness = 0;  // exact contact; the thickness is kept by proximity repulsion
 }
 
-ccd::Candidates CollisionPipeline::Impl::candidates(Scalar margin, CollisionCounters& counters, bool self,
+ccd::Candidates CollisionPipeline::Impl::candidates(Scalar reach, CollisionCounters& counters, bool self,
                                                     std::span<const std::uint8_t> moved, bool with_obstacles) {
   const auto begin = Clock::now();
+  // Two points closer than reach differ by less than reach along every axis (and by less than
+  // reach times an axis' length along a diagonal), so boxes and feature volumes grown by half
+  // of it on each side hold every such pair. Grown by the whole reach, they held pairs up to
+  // twice it apart, which no caller wants: on a mesh finer than the thickness that was four
+  // times the tests of a sheet at rest. The millionth keeps a pair at reach less a rounding.
+  const Scalar margin = 0.5 * reach * (1 + 1e-6);
   ccd::Candidates all;
   const bool self_pairs = self && model.scene.collisions.self;
   const bool culling = self_pairs && model.scene.collisions.self_culling;

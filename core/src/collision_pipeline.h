@@ -88,11 +88,11 @@ struct CollisionPipeline::Impl {
 
   explicit Impl(const Model& m, const CollisionSettings& s);
 
-  // Candidate elementary tests for the motion start -> end, boxes grown by margin; the cloth
-  // against itself too when self-collision is on and self is asked for, against the mesh
-  // obstacles unless obstacles is false; with moved (a flag per vertex), only the tests with a
-  // moved vertex.
-  ccd::Candidates candidates(Scalar margin, CollisionCounters& counters, bool self = true,
+  // Candidate elementary tests for the motion start -> end: every test whose two features come
+  // closer than reach at some time of the step (and some farther); the cloth against itself too
+  // when self-collision is on and self is asked for, against the mesh obstacles unless obstacles
+  // is false; with moved (a flag per vertex), only the tests with a moved vertex.
+  ccd::Candidates candidates(Scalar reach, CollisionCounters& counters, bool self = true,
                              std::span<const std::uint8_t> moved = {}, bool obstacles = true);
 
   // Which vertices a first round's test must involve: those free to move or moving over the

@@ -423,3 +423,35 @@ TEST(Collision, NoTestIsMadeOfPinnedAndObstacleVerticesThatStayStill) {
     std::printf("%s: %ld triangle pairs, %ld tests, %ld hits\n", c.name, counters.bvh_pairs, tests, counters.ccd_hits);
   }
 }
+
+TEST(Collision, FeaturesAreTestedWhenCloserThanTheThicknessAndNotWhenFarther) {
+  // Two free square cloths of 2 x 2 quads, 20 cm wide, one over the other, at rest: their
+  // features are tested (for proximity) when the sheets lie just within the 5 mm thickness,
+  // and not at all just beyond it, where no gap can be kept and no collision found (the boxes
+  // and feature volumes grown by half the thickness on each side; grown by all of it, they
+  // listed pairs up to twice the thickness apart).
+  for (const Scalar gap : {0.99, 1.01, 1.5}) {
+    std::ostringstream json;
+    json << R"({"frame_time": 0.05, "frame_steps": 1,
+      "cloths": [{"grid": {"size": [0.2, 0.2], "resolution": [2, 2]}},
+                 {"grid": {"size": [0.2, 0.2], "resolution": [2, 2]}, "transform": {"translate": [0.013, 0.007, )"
+         << gap * 0.005 << R"(]}}],
+      "collisions": {"self": true, "thickness": 0.005}})";
+    const Model model = build_model(parse_scene(json.str(), "inline.json"));
+    std::vector<Vec3> motion(model.vertex_count(), Vec3::Zero());
+    CollisionPipeline pipeline(model, CollisionSettings{});
+    long across = 0;  // tests of one cloth's feature against the other's
+    pipeline.set_observer([&](const ccd::BatchInput& input, long) {
+      const int second = model.cloths[1].first_vertex;
+      for (const auto& p : input.vertex_face) across += (p.vertex >= second) != (p.face[0] >= second);
+      for (const auto& p : input.edge_edge) across += (p.edge_a[0] >= second) != (p.edge_b[0] >= second);
+    });
+    const CollisionCounters c = pipeline.resolve(model.initial_positions, 0, model.scene.timestep(), motion, 0);
+    EXPECT_EQ(c.ccd_hits, 0) << gap;
+    EXPECT_EQ(c.proximity_impulses, 0) << gap;  // at rest: nothing to stop
+    if (gap < 1)
+      EXPECT_GT(across, 0) << gap;
+    else
+      EXPECT_EQ(across, 0) << gap;
+  }
+}
