@@ -9,6 +9,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <tuple>
 
 #include "sorted_pairs.h"
@@ -51,7 +52,71 @@ std::vector<FeatureVolume> vertex_volumes(std::span<const Vec3> start, std::span
   return volumes;
 }
 
+bool overlap_within(const FeatureVolume& a, const FeatureVolume& b, Scalar shrink) {
+  const Scalar straight = 2 * shrink, diagonal = straight * std::sqrt(Scalar(2));
+  bool apart = false;
+  for (int k = 0; k < FeatureVolume::AXES; ++k) {
+    const Scalar s = k < 3 ? straight : diagonal;
+    apart |= (a.min[k] + s > b.max[k]) | (b.min[k] + s > a.max[k]);
+  }
+  return !apart;
+}
+
 namespace {
+
+// How far a test's volumes may be shrunk (RestGaps) when the least rest distance between a
+// vertex of one feature and one of the other is sqrt(least_squared): none from the distance
+// at which the gap is the whole thickness on; below it, the margin less its share.
+class Shrink {
+ public:
+  explicit Shrink(const RestGaps& rest)
+      : whole_squared_(rest.thickness * rest.thickness / (rest.fraction * rest.fraction)),
+        per_distance_(rest.margin * rest.fraction / rest.thickness),
+        margin_(rest.margin) {}
+  Scalar operator()(Scalar least_squared) const {
+    return least_squared < whole_squared_ ? margin_ - per_distance_ * std::sqrt(least_squared) : 0;
+  }
+
+ private:
+  Scalar whole_squared_, per_distance_, margin_;
+};
+
+std::int32_t group_of(const RestGaps& rest, std::int32_t v) {
+  return std::size_t(v) < rest.group.size() ? rest.group[std::size_t(v)] : -1;
+}
+
+// The shrink for a test with vertices v: 0 unless all four belong to one group; then the
+// least rest distance between the first first_count of v and the others'.
+Scalar rest_shrink(const RestGaps* rest, const std::array<std::int32_t, 4>& v, int first_count) {
+  if (!rest) return 0;
+  const std::int32_t g = group_of(*rest, v[0]);
+  if (g < 0 || group_of(*rest, v[1]) != g || group_of(*rest, v[2]) != g || group_of(*rest, v[3]) != g) return 0;
+  Scalar least = std::numeric_limits<Scalar>::infinity();
+  for (int i = 0; i < first_count; ++i)
+    for (int j = first_count; j < 4; ++j)
+      least = std::min(least, (rest->rest[std::size_t(v[i])] - rest->rest[std::size_t(v[j])]).squaredNorm());
+  return Shrink(*rest)(least);
+}
+
+// The squared rest distances between the corners of two triangles of one group (RestGaps),
+// corner i of the first against corner j of the second at [i][j]; rested false for others.
+struct CornerDistances {
+  bool rested = false;
+  std::array<std::array<Scalar, 3>, 3> squared;
+};
+
+CornerDistances corner_distances(const RestGaps* rest, const TriangleIndices& a, const TriangleIndices& b) {
+  CornerDistances d;
+  if (!rest) return d;
+  const std::int32_t g = group_of(*rest, a[0]);
+  if (g < 0) return d;
+  for (int k = 0; k < 3; ++k)
+    if (group_of(*rest, a[k]) != g || group_of(*rest, b[k]) != g) return d;
+  d.rested = true;
+  for (int i = 0; i < 3; ++i)
+    for (int j = 0; j < 3; ++j) d.squared[i][j] = (rest->rest[std::size_t(a[i])] - rest->rest[std::size_t(b[j])]).squaredNorm();
+  return d;
+}
 
 btDbvtVolume volume_of(const Aabb& box) {
   return btDbvtVolume::FromMM(btVector3(box.min.x(), box.min.y(), box.min.z()),
@@ -189,7 +254,7 @@ FeatureVolume merged_volume(std::span<const FeatureVolume> vertex_volumes, std::
 Candidates features_of(std::span<const TriangleIndices> triangles_a, std::span<const TriangleIndices> triangles_b,
                        std::span<const std::pair<std::int32_t, std::int32_t>> pairs, const FeatureOwners* owners_a,
                        const FeatureOwners* owners_b, std::span<const FeatureVolume> vertex_volumes, int threads,
-                       std::span<const std::uint8_t> moved) {
+                       std::span<const std::uint8_t> moved, const RestGaps* rest) {
   Candidates out;
   const bool owned = owners_a && owners_b;
   const auto answers = [&](const FeatureOwners* owners, std::int32_t triangle, int bit) {
@@ -228,21 +293,31 @@ Candidates features_of(std::span<const TriangleIndices> triangles_a, std::span<c
   const bool same_triangles = triangles_a.data() == triangles_b.data() && triangles_a.size() == triangles_b.size();
   const std::vector<TriangleVolumes> volumes_b = same_triangles ? std::vector<TriangleVolumes>{} : volumes_of(triangles_b);
   const std::vector<TriangleVolumes>& of_b = same_triangles ? volumes_a : volumes_b;
+  const Shrink shrink(rest ? *rest : RestGaps{{}, {}, 1, 1, 0});
   using Key = std::array<std::int32_t, 4>;  // (vertex, face corners) and (edge, edge), canonical
   const auto shares = [](std::int32_t v, const TriangleIndices& t) { return v == t[0] || v == t[1] || v == t[2]; };
   // The features of pairs [begin, end) into vf and ee.
   const auto collect = [&](std::size_t begin, std::size_t end, std::vector<Key>& vf, std::vector<Key>& ee) {
     vf.reserve((end - begin) * 6);
     ee.reserve((end - begin) * 9);
+    // least(distances(), k): the squared rest distance from corner k of from to the nearest of
+    // face's corners.
     const auto add_vertex_face = [&](const TriangleIndices& from, const FeatureOwners* from_owners, std::int32_t from_index,
                                      const TriangleIndices& face, const FeatureOwners* face_owners, std::int32_t face_index,
-                                     const FeatureVolume* face_volume) {
+                                     const FeatureVolume* face_volume, const auto& distances, const auto& least) {
       if (!answers(face_owners, face_index, 6)) return;
       for (int k = 0; k < 3; ++k) {
         const std::int32_t v = from[k];
-        if (answers(from_owners, from_index, k) && !shares(v, face) && any_moved(v, face[0], face[1], face[2]) &&
-            (!cull || overlap(vertex_volumes[v], *face_volume)))
-          vf.push_back({v, face[0], face[1], face[2]});
+        if (!answers(from_owners, from_index, k) || shares(v, face) || !any_moved(v, face[0], face[1], face[2])) continue;
+        if (cull) {
+          if (!overlap(vertex_volumes[v], *face_volume)) continue;
+          const CornerDistances& c = distances();
+          if (c.rested) {
+            const Scalar by = shrink(least(c, k));
+            if (by > 0 && !overlap_within(vertex_volumes[v], *face_volume, by)) continue;
+          }
+        }
+        vf.push_back({v, face[0], face[1], face[2]});
       }
     };
     for (std::size_t p = begin; p < end; ++p) {
@@ -251,8 +326,19 @@ Candidates features_of(std::span<const TriangleIndices> triangles_a, std::span<c
       const TriangleIndices& b = triangles_b[ib];
       const TriangleVolumes* va = cull ? &volumes_a[ia] : nullptr;
       const TriangleVolumes* vb = cull ? &of_b[ib] : nullptr;
-      add_vertex_face(a, owners_a, ia, b, owners_b, ib, cull ? &vb->face : nullptr);
-      add_vertex_face(b, owners_b, ib, a, owners_a, ia, cull ? &va->face : nullptr);
+      // The corners' rest distances, computed when a test first needs them.
+      CornerDistances d;
+      bool measured = false;
+      const auto distances = [&]() -> const CornerDistances& {
+        if (!measured) d = corner_distances(rest, a, b), measured = true;
+        return d;
+      };
+      add_vertex_face(a, owners_a, ia, b, owners_b, ib, cull ? &vb->face : nullptr, distances, [](const CornerDistances& c, int k) {
+        return std::min({c.squared[k][0], c.squared[k][1], c.squared[k][2]});
+      });
+      add_vertex_face(b, owners_b, ib, a, owners_a, ia, cull ? &va->face : nullptr, distances, [](const CornerDistances& c, int k) {
+        return std::min({c.squared[0][k], c.squared[1][k], c.squared[2][k]});
+      });
       for (int i = 0; i < 3; ++i) {
         if (!answers(owners_a, ia, 3 + i)) continue;
         std::array<std::int32_t, 2> e{a[i], a[(i + 1) % 3]};
@@ -262,7 +348,16 @@ Candidates features_of(std::span<const TriangleIndices> triangles_a, std::span<c
           std::array<std::int32_t, 2> f{b[j], b[(j + 1) % 3]};
           if (f[0] > f[1]) std::swap(f[0], f[1]);
           if (e[0] == f[0] || e[0] == f[1] || e[1] == f[0] || e[1] == f[1] || !any_moved(e[0], e[1], f[0], f[1])) continue;
-          if (cull && !overlap(va->edge[i], vb->edge[j])) continue;
+          if (cull) {
+            if (!overlap(va->edge[i], vb->edge[j])) continue;
+            const CornerDistances& c = distances();
+            const int i1 = (i + 1) % 3, j1 = (j + 1) % 3;
+            const auto& q = c.squared;
+            if (c.rested) {
+              const Scalar by = shrink(std::min({q[i][j], q[i][j1], q[i1][j], q[i1][j1]}));
+              if (by > 0 && !overlap_within(va->edge[i], vb->edge[j], by)) continue;
+            }
+          }
           // The same two edges can come from (a, b) or (b, a): order them.
           if (f < e) ee.push_back({f[0], f[1], e[0], e[1]});
           else ee.push_back({e[0], e[1], f[0], f[1]});
@@ -314,23 +409,27 @@ Candidates features_of(std::span<const TriangleIndices> triangles_a, std::span<c
 
 Candidates feature_pairs(std::span<const TriangleIndices> triangles_a, std::span<const TriangleIndices> triangles_b,
                          std::span<const std::pair<std::int32_t, std::int32_t>> pairs,
-                         std::span<const FeatureVolume> vertex_volumes, int threads, std::span<const std::uint8_t> moved) {
-  return features_of(triangles_a, triangles_b, pairs, nullptr, nullptr, vertex_volumes, threads, moved);
+                         std::span<const FeatureVolume> vertex_volumes, int threads, std::span<const std::uint8_t> moved,
+                         const RestGaps* rest) {
+  return features_of(triangles_a, triangles_b, pairs, nullptr, nullptr, vertex_volumes, threads, moved, rest);
 }
 
 Candidates feature_pairs(std::span<const TriangleIndices> triangles_a, std::span<const TriangleIndices> triangles_b,
                          std::span<const std::pair<std::int32_t, std::int32_t>> pairs, const FeatureOwners& owners_a,
                          const FeatureOwners& owners_b, std::span<const FeatureVolume> vertex_volumes, int threads,
-                         std::span<const std::uint8_t> moved) {
-  return features_of(triangles_a, triangles_b, pairs, &owners_a, &owners_b, vertex_volumes, threads, moved);
+                         std::span<const std::uint8_t> moved, const RestGaps* rest) {
+  return features_of(triangles_a, triangles_b, pairs, &owners_a, &owners_b, vertex_volumes, threads, moved, rest);
 }
 
-void keep_overlapping(Candidates& tests, std::span<const FeatureVolume> vertex_volumes) {
+void keep_overlapping(Candidates& tests, std::span<const FeatureVolume> vertex_volumes, const RestGaps* rest) {
   const auto merged = [&](std::span<const std::int32_t> vertices) { return merged_volume(vertex_volumes, vertices); };
   std::erase_if(tests.vertex_face, [&](const VertexFacePair& t) {
-    return !overlap(vertex_volumes[std::size_t(t.vertex)], merged(t.face));
+    return !overlap_within(vertex_volumes[std::size_t(t.vertex)], merged(t.face),
+                           rest_shrink(rest, {t.vertex, t.face[0], t.face[1], t.face[2]}, 1));
   });
-  std::erase_if(tests.edge_edge, [&](const EdgeEdgePair& t) { return !overlap(merged(t.edge_a), merged(t.edge_b)); });
+  std::erase_if(tests.edge_edge, [&](const EdgeEdgePair& t) {
+    return !overlap_within(merged(t.edge_a), merged(t.edge_b), rest_shrink(rest, {t.edge_a[0], t.edge_a[1], t.edge_b[0], t.edge_b[1]}, 2));
+  });
 }
 
 }  // namespace drape::ccd

@@ -31,12 +31,22 @@ void CollisionCounters::add(const CollisionCounters& o) {
   response_ms += o.response_ms;
 }
 
-std::string thickness_note(const Model& model) {
-  if (!model.scene.collisions.self) return {};
+namespace {
+
+// The cloths' shortest edge at rest.
+Scalar shortest_rest_edge(const Model& model) {
   Scalar shortest = std::numeric_limits<Scalar>::infinity();
-  for (const Triangle& t : model.triangles)  // the cloths' edges at rest
+  for (const Triangle& t : model.triangles)
     for (int k = 0; k < 3; ++k)
       shortest = std::min(shortest, (model.initial_positions[std::size_t(t[k])] - model.initial_positions[std::size_t(t[(k + 1) % 3])]).norm());
+  return shortest;
+}
+
+}  // namespace
+
+std::string thickness_note(const Model& model) {
+  if (!model.scene.collisions.self) return {};
+  const Scalar shortest = shortest_rest_edge(model);
   const Scalar thickness = model.scene.collisions.thickness;
   if (!(REST_FRACTION * shortest < thickness)) return {};
   char text[512];
@@ -86,6 +96,7 @@ CollisionPipeline::Impl::Impl(const Model& m, const CollisionSettings& s) : mode
   start.resize(offset);
   end.resize(offset);
   if (m.scene.collisions.self && m.scene.collisions.self_culling) patch_tree = ccd::PatchTree(cloth_triangles, m.initial_positions);
+  rest_gaps = m.scene.collisions.self && REST_FRACTION * shortest_rest_edge(m) < m.scene.collisions.thickness;
   cloth_owners = ccd::feature_owners(cloth_triangles);
   options.method = m.scene.collisions.method;
   options.thickness = 0;  // exact contact; the thickness is kept by proximity repulsion
@@ -136,17 +147,22 @@ ccd::Candidates CollisionPipeline::Impl::candidates(Scalar reach, CollisionCount
     else features.clear();
     features_ready = true;
   };
+  // A test of one cloth's features that lie close in its rest shape keeps only a share of the
+  // thickness (kept_gap): its volumes need overlap only within that share of the margin.
+  const ccd::RestGaps rest_shape{std::span<const Vec3>(model.initial_positions).first(std::size_t(cloth_vertices)), cloth_of_vertex,
+                                 REST_FRACTION, model.scene.collisions.thickness, margin};
+  const ccd::RestGaps* rest = rest_gaps ? &rest_shape : nullptr;
   const auto append = [&](std::span<const ccd::TriangleIndices> other, const ccd::FeatureOwners& other_owners,
-                          const std::vector<std::pair<std::int32_t, std::int32_t>>& pairs) {
+                          const std::vector<std::pair<std::int32_t, std::int32_t>>& pairs, const ccd::RestGaps* rest_gaps) {
     counters.bvh_pairs += long(pairs.size());
     if (pairs.empty()) return;
     make_features();
     // Each test once by its features' triangles; without feature volumes (the paper's count,
     // every test of every overlapping pair), every pair's tests, sorted and made unique.
     ccd::Candidates c =
-        features.empty() ? ccd::feature_pairs(cloth_triangles, other, pairs, features, settings.threads, mask)
+        features.empty() ? ccd::feature_pairs(cloth_triangles, other, pairs, features, settings.threads, mask, rest_gaps)
                          : ccd::feature_pairs(cloth_triangles, other, pairs, cloth_owners, other_owners, features,
-                                              settings.threads, mask);
+                                              settings.threads, mask, rest_gaps);
     all.vertex_face.insert(all.vertex_face.end(), c.vertex_face.begin(), c.vertex_face.end());
     all.edge_edge.insert(all.edge_edge.end(), c.edge_edge.begin(), c.edge_edge.end());
   };
@@ -157,16 +173,16 @@ ccd::Candidates CollisionPipeline::Impl::candidates(Scalar reach, CollisionCount
     ccd::Candidates orphans;
     const bool owned = model.scene.collisions.feature_boxes;
     append(cloth_triangles, cloth_owners,
-           patch_tree.self_pairs(start, end, margin, settings.threads, &culled, mask, owned ? &orphans : nullptr));
+           patch_tree.self_pairs(start, end, margin, settings.threads, &culled, mask, owned ? &orphans : nullptr), rest);
     counters.culled_triangles += culled.triangles_culled;
     if (!orphans.vertex_face.empty() || !orphans.edge_edge.empty()) {
       make_features();
-      ccd::keep_overlapping(orphans, features);
+      ccd::keep_overlapping(orphans, features, rest);
       all.vertex_face.insert(all.vertex_face.end(), orphans.vertex_face.begin(), orphans.vertex_face.end());
       all.edge_edge.insert(all.edge_edge.end(), orphans.edge_edge.begin(), orphans.edge_edge.end());
     }
   } else if (self_pairs) {
-    append(cloth_triangles, cloth_owners, cloth_tree.self_pairs());
+    append(cloth_triangles, cloth_owners, cloth_tree.self_pairs(), rest);
   }
   for (MeshObstacle& mo : obstacles) {
     if (!with_obstacles || tree_triangles.empty()) break;
@@ -175,7 +191,7 @@ ccd::Candidates CollisionPipeline::Impl::candidates(Scalar reach, CollisionCount
     mo.tree.update(obstacle_boxes);
     auto pairs = cloth_tree.pairs_with(mo.tree);
     for (auto& [cloth, obstacle] : pairs) cloth = tree_triangles[std::size_t(cloth)];  // increasing: still sorted
-    append(mo.triangles, mo.owners, pairs);
+    append(mo.triangles, mo.owners, pairs, nullptr);
   }
   counters.broad_ms += ms_since(begin);
   return all;

@@ -73,6 +73,10 @@ struct CollisionPipeline::Impl {
   ccd::FeatureOwners cloth_owners;  // which triangle makes the tests of each cloth vertex and edge
   std::vector<Scalar> inverse_mass;  // combined array; 0 for kinematic vertices
   std::vector<int> cloth_of_vertex;  // cloth vertices only: the index of their cloth
+  // Whether a cloth's rest shape has features closer than the thickness over REST_FRACTION
+  // (an edge shorter than that): only then can a test's kept gap be less than the thickness,
+  // and candidates() look at the rest shape's distances (ccd::RestGaps).
+  bool rest_gaps = false;
   std::vector<Vec3> start, end;      // combined positions at t and t + h
   std::vector<ccd::Aabb> boxes;
   std::vector<std::int32_t> tree_triangles;  // the cloth triangles in cloth_tree, in order

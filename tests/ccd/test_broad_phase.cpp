@@ -7,6 +7,7 @@
 #include <set>
 
 #include "drape/ccd/broad_phase.h"
+#include "drape/ccd/distance.h"
 #include "sorted_pairs.h"
 
 using namespace drape;
@@ -178,6 +179,89 @@ TEST(FeaturePairs, FeatureVolumesDropOnlyPairsThatStayApart) {
   EXPECT_GT(vf_kept, 0u);
   EXPECT_LT(vf_kept, all.vertex_face.size());  // the random set has both kinds
   EXPECT_LT(ee_kept, all.edge_edge.size());
+}
+
+// Rest gaps (RestGaps): two grids of 3 mm cells with a 5 mm thickness, one crumpled into
+// waves and squeezed so that its own features come near, the other laid close over it, all
+// moving. Every test the rest gaps drop is one that the volumes alone keep, of two features of
+// one grid, whose start distance is at least the gap kept for them (half their rest distance,
+// at most the thickness) and which do not touch during the step; tests of the two grids'
+// features keep the whole margin; and most of the one grid's neighbours are dropped.
+TEST(FeaturePairs, RestGapsDropOnlyTestsThatCannotComeWithinTheirGap) {
+  constexpr int N = 14;
+  constexpr Scalar CELL = 0.003, THICKNESS = 0.005, FRACTION = 0.5;
+  std::mt19937_64 rng(35);
+  std::uniform_real_distribution<Scalar> jitter(-0.0004, 0.0004);
+  std::vector<Vec3> rest, start, end;
+  std::vector<TriangleIndices> tris;
+  std::vector<std::int32_t> group;
+  for (int sheet = 0; sheet < 2; ++sheet) {
+    const int first = int(rest.size());
+    for (int j = 0; j < N; ++j)
+      for (int i = 0; i < N; ++i) {
+        const Vec3 r(i * CELL, j * CELL, 0);
+        rest.push_back(r);
+        group.push_back(sheet);
+        // Sheet 0 squeezed to 70 % along x and waved (folds 6 mm across); sheet 1 flat, 4 mm
+        // above the waves' crests.
+        const Vec3 p = sheet == 0 ? Vec3(0.7 * r.x(), r.y(), 0.003 * std::sin(r.x() * 900)) : Vec3(r.x() * 0.7, r.y(), 0.007);
+        start.push_back(p + Vec3(jitter(rng), jitter(rng), jitter(rng)));
+        end.push_back(start.back() + Vec3(jitter(rng), jitter(rng), jitter(rng)));
+      }
+    for (int j = 0; j + 1 < N; ++j)
+      for (int i = 0; i + 1 < N; ++i) {
+        const int a = first + j * N + i, b = a + 1, c = a + N, d = c + 1;
+        tris.push_back({a, b, d});
+        tris.push_back({a, d, c});
+      }
+  }
+  const Scalar margin = 0.5 * THICKNESS;
+  const auto volumes = vertex_volumes(start, end, margin);
+  std::vector<std::pair<std::int32_t, std::int32_t>> pairs;
+  for (std::int32_t i = 0; i < std::int32_t(tris.size()); ++i)
+    for (std::int32_t j = i + 1; j < std::int32_t(tris.size()); ++j)
+      if (overlap(swept_box(tris[std::size_t(i)], start, end, margin), swept_box(tris[std::size_t(j)], start, end, margin)))
+        pairs.emplace_back(i, j);
+  const RestGaps gaps{rest, group, FRACTION, THICKNESS, margin};
+  const Candidates whole = feature_pairs(tris, tris, pairs, volumes);
+  const Candidates rested = feature_pairs(tris, tris, pairs, volumes, 1, {}, &gaps);
+  std::set<std::array<std::int32_t, 4>> kept;
+  for (const auto& p : rested.vertex_face) kept.insert({p.vertex, p.face[0], p.face[1], p.face[2]});
+  for (const auto& p : rested.edge_edge) kept.insert({p.edge_a[0], p.edge_a[1], p.edge_b[0], p.edge_b[1]});
+  std::set<std::array<std::int32_t, 4>> all;
+  Options touching;
+  touching.method = Method::Conservative;
+  touching.thickness = 1e-9;
+  const BatchInput input{start, end, {}, {}};
+  long dropped_one_sheet = 0, one_sheet = 0, across = 0;
+  const auto check = [&](const std::array<std::int32_t, 4>& v, bool vertex_face, auto&& query) {
+    all.insert(v);
+    const bool same = group[std::size_t(v[0])] == group[std::size_t(v[1])] && group[std::size_t(v[0])] == group[std::size_t(v[2])] &&
+                      group[std::size_t(v[0])] == group[std::size_t(v[3])];
+    one_sheet += same;
+    across += !same;
+    if (kept.count(v)) return;
+    ASSERT_TRUE(same) << "a test across the grids was dropped";
+    ++dropped_one_sheet;
+    const auto at = [&](const std::vector<Vec3>& x, int k) -> const Vec3& { return x[std::size_t(v[std::size_t(k)])]; };
+    const auto distance = [&](const std::vector<Vec3>& x) {
+      return vertex_face ? std::sqrt(closest_point_triangle<Scalar>(at(x, 0), at(x, 1), at(x, 2), at(x, 3)).distance_squared)
+                         : std::sqrt(closest_segment_segment<Scalar>(at(x, 0), at(x, 1), at(x, 2), at(x, 3)).distance_squared);
+    };
+    const Scalar gap = std::min(THICKNESS, FRACTION * distance(rest));
+    EXPECT_GE(distance(start), gap);
+    EXPECT_FALSE(query(touching).hit);
+  };
+  for (const auto& p : whole.vertex_face)
+    check({p.vertex, p.face[0], p.face[1], p.face[2]}, true, [&](const Options& o) { return vertex_face_ccd(gather(input, p), o); });
+  for (const auto& p : whole.edge_edge)
+    check({p.edge_a[0], p.edge_a[1], p.edge_b[0], p.edge_b[1]}, false,
+          [&](const Options& o) { return edge_edge_ccd(gather(input, p), o); });
+  for (const auto& v : kept) EXPECT_TRUE(all.count(v)) << "a test the volumes alone drop was kept";
+  std::printf("tests: %ld of one grid (%ld dropped by the rest gaps), %ld across\n", one_sheet, dropped_one_sheet, across);
+  EXPECT_GT(across, 0);
+  EXPECT_GT(dropped_one_sheet, one_sheet / 2);
+  EXPECT_LT(dropped_one_sheet, one_sheet);  // the squeezed waves bring some within their gap
 }
 
 // On a flat grid at rest the box of a right triangle holds the far corner of its quad; the

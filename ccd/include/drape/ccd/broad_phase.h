@@ -53,6 +53,25 @@ inline bool overlap(const FeatureVolume& a, const FeatureVolume& b) {
 /// The volumes of single vertices moving from start to end, grown by margin.
 std::vector<FeatureVolume> vertex_volumes(std::span<const Vec3> start, std::span<const Vec3> end, Scalar margin);
 
+/// Features of one sheet that lie close in its rest shape may keep a smaller gap than the
+/// thickness (drape keeps fraction times their rest distance, at most the thickness): such a
+/// test needs its features' volumes to overlap only within that share of their margin. For a
+/// test whose four vertices all belong to one group (a cloth; vertices past group's end or
+/// of group -1 belong to none), the margin is scaled by min(1, fraction d / thickness), d the
+/// least rest distance between a vertex of one feature and one of the other (at least the
+/// features' rest distance, so the scaled margin still holds every pair closer than its gap).
+struct RestGaps {
+  std::span<const Vec3> rest;            ///< per vertex of a group: its rest position
+  std::span<const std::int32_t> group;  ///< per vertex: its group, -1 for none
+  Scalar fraction = 0;                   ///< the share of the rest distance kept as the gap
+  Scalar thickness = 0;                  ///< the gap's cap
+  Scalar margin = 0;                     ///< the vertex volumes' margin (vertex_volumes())
+};
+
+/// Whether a and b (grown by margin) still overlap with each shrunk by shrink along every axis
+/// (times the axis' length): shrink 0 is overlap().
+bool overlap_within(const FeatureVolume& a, const FeatureVolume& b, Scalar shrink);
+
 /// A btDbvt over boxes, one leaf per box, kept behind this type.
 class BoxTree {
  public:
@@ -107,11 +126,12 @@ FeatureOwners feature_owners(std::span<const TriangleIndices> triangles);
 /// pairs index triangles_a (first) and triangles_b (second); for self-collision pass the same
 /// span twice. threads: the pairs are split into chunks done in parallel (TBB); the result is
 /// sorted and the same for any thread count. With moved (a flag per vertex), only the features
-/// with a moved vertex are kept.
+/// with a moved vertex are kept. With rest gaps, the volumes of tests within one group overlap
+/// within their rest gap's share of the margin (RestGaps).
 Candidates feature_pairs(std::span<const TriangleIndices> triangles_a, std::span<const TriangleIndices> triangles_b,
                          std::span<const std::pair<std::int32_t, std::int32_t>> pairs,
                          std::span<const FeatureVolume> vertex_volumes = {}, int threads = 1,
-                         std::span<const std::uint8_t> moved = {});
+                         std::span<const std::uint8_t> moved = {}, const RestGaps* rest = nullptr);
 
 /// The same tests, each made once by the pair of the triangles answering for its two features
 /// (owners_a of triangles_a, owners_b of triangles_b), in the order of pairs and not sorted: no
@@ -124,10 +144,10 @@ Candidates feature_pairs(std::span<const TriangleIndices> triangles_a, std::span
 Candidates feature_pairs(std::span<const TriangleIndices> triangles_a, std::span<const TriangleIndices> triangles_b,
                          std::span<const std::pair<std::int32_t, std::int32_t>> pairs, const FeatureOwners& owners_a,
                          const FeatureOwners& owners_b, std::span<const FeatureVolume> vertex_volumes = {}, int threads = 1,
-                         std::span<const std::uint8_t> moved = {});
+                         std::span<const std::uint8_t> moved = {}, const RestGaps* rest = nullptr);
 
 /// Keeps the tests whose features' volumes overlap, as feature_pairs culls them: a vertex's
 /// volume against its face's (its corners' merged), an edge's against the other's.
-void keep_overlapping(Candidates& tests, std::span<const FeatureVolume> vertex_volumes);
+void keep_overlapping(Candidates& tests, std::span<const FeatureVolume> vertex_volumes, const RestGaps* rest = nullptr);
 
 }  // namespace drape::ccd
