@@ -124,7 +124,29 @@ ccd::Candidates CollisionPipeline::Impl::candidates(Scalar reach, CollisionCount
   // or a moving handle's) or moves: every test of the others would be dropped (a test's cloth
   // features belong to their triangle of the pair). Not narrowed to a round's movable or moved
   // vertices: a change of its triangles rebuilds the tree, which cost more than the pairs.
-  const bool cloth_tree_needed = (with_obstacles && !obstacles.empty()) || (self_pairs && !culling);
+  // The mesh obstacles whose swept box meets the cloth's (both grown by the margin): no other
+  // can give a pair, and with none the cloth's tree is neither updated nor traversed (a cloth
+  // falling towards a table spent most of its broad phase there).
+  const auto swept_range = [&](int first, int count) {
+    ccd::Aabb box{start[std::size_t(first)], start[std::size_t(first)]};
+    for (int v = first; v < first + count; ++v) {
+      box.min = box.min.cwiseMin(start[std::size_t(v)]).cwiseMin(end[std::size_t(v)]);
+      box.max = box.max.cwiseMax(start[std::size_t(v)]).cwiseMax(end[std::size_t(v)]);
+    }
+    box.min.array() -= margin;
+    box.max.array() += margin;
+    return box;
+  };
+  std::vector<std::uint8_t> near_cloth(obstacles.size(), 0);
+  if (with_obstacles && cloth_vertices > 0) {
+    const ccd::Aabb cloth_box = swept_range(0, cloth_vertices);
+    for (std::size_t k = 0; k < obstacles.size(); ++k) {
+      const int count = int(obstacles[k].obstacle->mesh.vertices.size());
+      near_cloth[k] = count > 0 && ccd::overlap(cloth_box, swept_range(obstacles[k].first_vertex, count));
+    }
+  }
+  const bool any_near = std::any_of(near_cloth.begin(), near_cloth.end(), [](std::uint8_t n) { return n != 0; });
+  const bool cloth_tree_needed = any_near || (self_pairs && !culling);
   if (cloth_tree_needed) {
     bool restrict = !movable.empty() && !(self_pairs && !culling);
     for (std::size_t v = std::size_t(cloth_vertices); v < movable.size() && restrict; ++v) restrict = !movable[v];
@@ -184,8 +206,10 @@ ccd::Candidates CollisionPipeline::Impl::candidates(Scalar reach, CollisionCount
   } else if (self_pairs) {
     append(cloth_triangles, cloth_owners, cloth_tree.self_pairs(), rest);
   }
-  for (MeshObstacle& mo : obstacles) {
+  for (std::size_t k = 0; k < obstacles.size(); ++k) {
     if (!with_obstacles || tree_triangles.empty()) break;
+    if (!near_cloth[k]) continue;
+    MeshObstacle& mo = obstacles[k];
     std::vector<ccd::Aabb> obstacle_boxes(mo.triangles.size());
     for (std::size_t i = 0; i < mo.triangles.size(); ++i) obstacle_boxes[i] = ccd::swept_box(mo.triangles[i], start, end, margin);
     mo.tree.update(obstacle_boxes);
