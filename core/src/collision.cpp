@@ -138,7 +138,7 @@ ccd::Candidates CollisionPipeline::Impl::candidates(Scalar reach, CollisionCount
     return box;
   };
   std::vector<std::uint8_t> near_cloth(obstacles.size(), 0);
-  if (with_obstacles && cloth_vertices > 0) {
+  if (with_obstacles && !obstacles.empty() && cloth_vertices > 0) {
     const ccd::Aabb cloth_box = swept_range(0, cloth_vertices);
     for (std::size_t k = 0; k < obstacles.size(); ++k) {
       const int count = int(obstacles[k].obstacle->mesh.vertices.size());
