@@ -19,7 +19,7 @@
 # - the cantilever test (scenes/cantilever.json's strip) with each preset: measured / elastica.
 # The source of the presets publishes no Cusick figures for them: the table says so.
 # Prints one line per preset and exits 1 when a run fails or finds an intersection. Long
-# (about 40 minutes on this 2-core machine, most of it the 3 mm discs): a benchmark, not a test.
+# (about 7 minutes on this 2-core machine in session 35, most of it the 3 mm discs): a benchmark, not a test.
 # Usage: bench/textile_runs.sh [BUILD_DIR] [OUT]; PRESETS="royal-target ..." for a subset,
 # MESHES="disc_30cm_grid_12mm.obj disc_30cm_grid.obj" for fewer resolutions or
 # MESHES="disc_30cm_12mm.obj disc_30cm.obj disc_30cm_3mm.obj" for the ring discs, COMPRESSION=0.01 to give
