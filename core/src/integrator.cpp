@@ -509,16 +509,20 @@ StepReport Integrator::step(State& state) {
     const bool energy = too_much_energy(excess) && !for_limit;
     const bool limit = stretched > STRAIN_RETAKE || for_limit;
     const bool within = finer_excess <= std::max(excess, energy_tolerance_);
+    // A spike's retake must at least halve its excess over the warning (not a rounding's
+    // difference: a cloth near the warning under a steady load would be retaken to the last
+    // part) and must not take a limited spring back past what its limit allows.
+    const bool spike_halved = finer_spike - warn <= 0.5 * (spike - warn);
     const bool better = energy  ? finer_excess < excess
                         : limit ? finer_stretched < stretched && within
-                                : finer_spike < spike && within;
+                                : spike_halved && within && finer_stretched <= std::max(stretched, STRAIN_RETAKE);
     // The energy's retakes go on while its excess keeps falling by half at least, or while it
     // stays past what would make the run warn: a cloth thrown at a ball with a strain limit
     // fell only from 478 to 278 J in 2 parts (without the limit, from 286,000 J, by 5 to 12
     // times a halving), and the run stopped where 32 parts would have kept it.
     const bool converging = energy  ? finer_excess <= 0.5 * excess || std::min(excess, finer_excess) > energy_warning_
                             : limit ? true
-                                    : finer_spike < spike;
+                                    : better;
     if (better) {
       spent.add(report);
       report = finer, excess = finer_excess, stretched = finer_stretched, spike = finer_spike, state = std::move(again);

@@ -367,7 +367,7 @@ TEST(Integrator, StrainLimitingHoldsACurtainStruckByAMovingMeshBall) {
 // the box's faces stopped the vertices on either side and the spring across the corner took
 // the motion, 1.514 times its rest length (1.195 at 12 steps a frame, 1.091 with the box
 // still; the step's energy within tolerance). A step that takes the cloth past
-// limits.stretch_warn from below it is now taken again in parts while they lower it: every
+// limits.stretch_warn from below it is now taken again in parts while they halve it: every
 // step ends within the warning limit (without the retake the test fails at frame 6).
 TEST(Integrator, AStepThatSpikesTheStretchPastTheWarningIsTakenAgainInParts) {
   const Model model = model_of(R"({"frame_time": 0.033333333333333333, "frame_steps": 6,
