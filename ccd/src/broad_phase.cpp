@@ -85,17 +85,16 @@ std::int32_t group_of(const RestGaps& rest, std::int32_t v) {
   return std::size_t(v) < rest.group.size() ? rest.group[std::size_t(v)] : -1;
 }
 
-// The shrink for a test with vertices v: 0 unless all four belong to one group; then the
-// least rest distance between the first first_count of v and the others'.
-Scalar rest_shrink(const RestGaps* rest, const std::array<std::int32_t, 4>& v, int first_count) {
-  if (!rest) return 0;
-  const std::int32_t g = group_of(*rest, v[0]);
-  if (g < 0 || group_of(*rest, v[1]) != g || group_of(*rest, v[2]) != g || group_of(*rest, v[3]) != g) return 0;
+// The shrink for a test with vertices v: 0 unless all four belong to one group; then shrink's
+// for the least rest distance between the first first_count of v and the others'.
+Scalar rest_shrink(const RestGaps& rest, const Shrink& shrink, const std::array<std::int32_t, 4>& v, int first_count) {
+  const std::int32_t g = group_of(rest, v[0]);
+  if (g < 0 || group_of(rest, v[1]) != g || group_of(rest, v[2]) != g || group_of(rest, v[3]) != g) return 0;
   Scalar least = std::numeric_limits<Scalar>::infinity();
   for (int i = 0; i < first_count; ++i)
     for (int j = first_count; j < 4; ++j)
-      least = std::min(least, (rest->rest[std::size_t(v[i])] - rest->rest[std::size_t(v[j])]).squaredNorm());
-  return Shrink(*rest)(least);
+      least = std::min(least, (rest.rest[std::size_t(v[i])] - rest.rest[std::size_t(v[j])]).squaredNorm());
+  return shrink(least);
 }
 
 // The squared rest distances between the corners of two triangles of one group (RestGaps),
@@ -423,12 +422,20 @@ Candidates feature_pairs(std::span<const TriangleIndices> triangles_a, std::span
 
 void keep_overlapping(Candidates& tests, std::span<const FeatureVolume> vertex_volumes, const RestGaps* rest) {
   const auto merged = [&](std::span<const std::int32_t> vertices) { return merged_volume(vertex_volumes, vertices); };
+  const Shrink shrink(rest ? *rest : RestGaps{{}, {}, 1, 1, 0});
+  // Whether a and b overlap, within the rest gap's share of the margin for a test of vertices
+  // v (first_count of them the first feature's): the rest distances only for those that do.
+  const auto keeps = [&](const FeatureVolume& a, const FeatureVolume& b, const std::array<std::int32_t, 4>& v, int first_count) {
+    if (!overlap(a, b)) return false;
+    if (!rest) return true;
+    const Scalar by = rest_shrink(*rest, shrink, v, first_count);
+    return by <= 0 || overlap_within(a, b, by);
+  };
   std::erase_if(tests.vertex_face, [&](const VertexFacePair& t) {
-    return !overlap_within(vertex_volumes[std::size_t(t.vertex)], merged(t.face),
-                           rest_shrink(rest, {t.vertex, t.face[0], t.face[1], t.face[2]}, 1));
+    return !keeps(vertex_volumes[std::size_t(t.vertex)], merged(t.face), {t.vertex, t.face[0], t.face[1], t.face[2]}, 1);
   });
   std::erase_if(tests.edge_edge, [&](const EdgeEdgePair& t) {
-    return !overlap_within(merged(t.edge_a), merged(t.edge_b), rest_shrink(rest, {t.edge_a[0], t.edge_a[1], t.edge_b[0], t.edge_b[1]}, 2));
+    return !keeps(merged(t.edge_a), merged(t.edge_b), {t.edge_a[0], t.edge_a[1], t.edge_b[0], t.edge_b[1]}, 2);
   });
 }
 

@@ -175,16 +175,16 @@ ccd::Candidates CollisionPipeline::Impl::candidates(Scalar reach, CollisionCount
                                  REST_FRACTION, model.scene.collisions.thickness, margin};
   const ccd::RestGaps* rest = rest_gaps ? &rest_shape : nullptr;
   const auto append = [&](std::span<const ccd::TriangleIndices> other, const ccd::FeatureOwners& other_owners,
-                          const std::vector<std::pair<std::int32_t, std::int32_t>>& pairs, const ccd::RestGaps* rest_gaps) {
+                          const std::vector<std::pair<std::int32_t, std::int32_t>>& pairs, const ccd::RestGaps* gaps) {
     counters.bvh_pairs += long(pairs.size());
     if (pairs.empty()) return;
     make_features();
     // Each test once by its features' triangles; without feature volumes (the paper's count,
     // every test of every overlapping pair), every pair's tests, sorted and made unique.
     ccd::Candidates c =
-        features.empty() ? ccd::feature_pairs(cloth_triangles, other, pairs, features, settings.threads, mask, rest_gaps)
+        features.empty() ? ccd::feature_pairs(cloth_triangles, other, pairs, features, settings.threads, mask, gaps)
                          : ccd::feature_pairs(cloth_triangles, other, pairs, cloth_owners, other_owners, features,
-                                              settings.threads, mask, rest_gaps);
+                                              settings.threads, mask, gaps);
     all.vertex_face.insert(all.vertex_face.end(), c.vertex_face.begin(), c.vertex_face.end());
     all.edge_edge.insert(all.edge_edge.end(), c.edge_edge.begin(), c.edge_edge.end());
   };

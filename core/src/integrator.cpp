@@ -541,7 +541,7 @@ StepReport Integrator::step(State& state) {
   // step that ends with a limited spring past what its limit allows (STRAIN_RETAKE: the rounds
   // of limit and response ran out) once its energy is within tolerance, then in each number of
   // parts up to the most: each part asks the rounds to undo a shorter motion.
-  // And a step that spiked the stretch past the warning limit, while its parts lower it.
+  // And a step that spiked the stretch past the warning limit, while its parts halve the excess.
   for (int parts = 2; report.ok && (too_much_energy(excess) || stretched > STRAIN_RETAKE || spike > warn) && parts <= most_parts;
        parts *= 2) {
     const auto [ran, converging] = attempt(parts, false);
