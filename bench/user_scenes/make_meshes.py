@@ -8,7 +8,8 @@ offset half a segment). paddle.obj: a closed box 0.8 x 0.05 x 0.3 m centred on t
 irregular_cloth.obj: a 1 m square of cloth in z = 0, 48 x 48 cells whose inner vertices are
 moved by up to 0.42 of a cell (a fixed pseudo-random sequence), each cell's diagonal drawn
 either way at random unless that would turn a triangle over: an irregular triangulation of the
-kind a remesher or a garment tool writes (edges from 4.6 to 51 mm)."""
+kind a remesher or a garment tool writes (edges from 4.6 to 51 mm). needle.obj: a closed cone
+standing on z = 0, radius 0.01 m at its base and its tip at z = 0.3 m (16 segments around)."""
 import math, os, random, sys
 
 HERE = os.path.dirname(os.path.abspath(__file__))
@@ -98,8 +99,19 @@ def irregular_cloth(cells=48, size=1.0, jitter=0.42, seed=7):
     return v, f
 
 
+def needle(around=16, radius=0.01, height=0.3):
+    v = [(0, 0, height), (0, 0, 0)]
+    v += [(radius * math.cos(2 * math.pi * i / around), radius * math.sin(2 * math.pi * i / around), 0) for i in range(around)]
+    f = []
+    for i in range(around):
+        a, b = 2 + i, 2 + (i + 1) % around
+        f += [(0, a, b), (1, b, a)]  # outward, counter-clockwise seen from outside
+    return v, f
+
+
 if __name__ == "__main__":
     write("hips.obj", *hips(), "a body of revolution widening at the hips (bench/user_scenes/make_meshes.py)")
     write("skirt.obj", *skirt(), "an open cone of cloth, a skirt (bench/user_scenes/make_meshes.py)")
     write("paddle.obj", *paddle(0.8, 0.05, 0.3), "a closed box 0.8 x 0.05 x 0.3 m (bench/user_scenes/make_meshes.py)")
     write("irregular_cloth.obj", *irregular_cloth(), "an irregular triangulation of a 1 m square (bench/user_scenes/make_meshes.py)")
+    write("needle.obj", *needle(), "a closed cone 0.3 m tall, 0.01 m in radius at its base (bench/user_scenes/make_meshes.py)")

@@ -237,13 +237,14 @@ StepReport Integrator::advance(State& state) {
     // thrown at fast_drop's sphere tore to 3.7 as the rest was pulled to them).
     if (!w.limited_springs.empty())
       report.external_work += limit_strain(state.positions, motion, &state.velocities, report);
-    respond(state, motion, report);
+    respond_holding(state, motion, report, held);
   }
   // The response acts after the limit: where it drags contact vertices on (a ball's friction),
-  // their neighbours are left past the limit. The limit and the response again, while so.
+  // their neighbours are left past the limit. The limit and the response again, while so, the
+  // vertices the response moved heavier in the limit (HELD_WEIGHT).
   for (int round = 0; round < STRAIN_RESPONSE_ROUNDS && past_limit(state.positions, motion); ++round) {
-    report.external_work += limit_strain(state.positions, motion, &state.velocities, report);
-    respond(state, motion, report);
+    report.external_work += limit_strain(state.positions, motion, &state.velocities, report, held);
+    respond_holding(state, motion, report, held);
   }
   report.obstacle_contacts = first_contacts;
   if (obstacles_move) report.external_work += std::max<Scalar>(0, kinetic_energy(m, state) - kinetic_before_response);
@@ -616,6 +617,15 @@ void Integrator::respond(State& state, std::vector<Vec3>& motion, StepReport& re
   const std::vector<Vec3> before = motion;
   report.collisions.add(collisions_->resolve(state.positions, state.time, h, motion, friction_));
   for (std::size_t v = 0; v < motion.size(); ++v) state.velocities[v] += motion[v] - before[v];
+}
+
+void Integrator::respond_holding(State& state, std::vector<Vec3>& motion, StepReport& report, std::vector<char>& held) {
+  if (work_->limited_springs.empty()) return respond(state, motion, report);
+  const std::vector<Vec3> before = motion;
+  respond(state, motion, report);
+  const Scalar negligible = NEGLIGIBLE_MOTION * model_.scene.collisions.thickness;
+  for (std::size_t v = 0; v < motion.size(); ++v)
+    if (work_->free_index[v] >= 0 && h_ * (motion[v] - before[v]).norm() > negligible) held[v] = 1;
 }
 
 Scalar kinetic_energy(const Model& model, const State& state) {

@@ -60,6 +60,13 @@ inline constexpr int STRAIN_LIMIT_SWEEPS = 200;
 // motion through the limit and the response again, at most STRAIN_RESPONSE_ROUNDS times.
 inline constexpr Scalar STRAIN_SLACK = 0.002;
 inline constexpr int STRAIN_RESPONSE_ROUNDS = 16;
+// In those rounds a vertex the step's response has moved (a contact's) weighs 1 / HELD_WEIGHT
+// times its mass in the limit's sweeps: what holds it (an obstacle, another layer) bears the
+// pull of the cloth hanging from it. At its own mass the limit pulled it back into the contact
+// and the response pushed it out again, round after round (a knit caught on a needle's tip
+// ran out of rounds in every step). Not infinitely heavy: a spring between two such vertices,
+// which the response has stretched, must still be brought back.
+inline constexpr Scalar HELD_WEIGHT = 0.01;
 // A step that still ends with a limited spring past (1 + STRAIN_RETAKE) times what its limit
 // allows it (Integrator::limit_excess; the rounds ran out) is taken again in parts, and then
 // without friction (Integrator::step).

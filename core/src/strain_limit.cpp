@@ -15,7 +15,8 @@ Scalar longest_allowed(const Spring& s, Scalar start) {
 
 StrainSweeps limit_strain_sweeps(const StrainSweepInput& in, std::vector<Vec3>& motion, std::vector<Vec3>* also,
                                  StrainSweepRecord& record) {
-  const auto& [springs, limited, positions, inverse_mass, h, max_sweeps] = in;
+  const auto& [springs, limited, positions, inverse_mass, h, max_sweeps, held] = in;
+  const auto weight = [&](std::size_t v) { return !held.empty() && held[v] ? HELD_WEIGHT * inverse_mass[v] : inverse_mass[v]; };
   // A spring is looked at again only once an end of it has moved since it was last looked at:
   // a curtain caught on a moving paddle ran its 200 sweeps over all 14,520 springs in every
   // call for the few dozen along its taut chains, 5.5 s of a 13.9 s frame.
@@ -34,7 +35,7 @@ StrainSweeps limit_strain_sweeps(const StrainSweepInput& in, std::vector<Vec3>& 
       // excess: not all at once (its excess over h as a speed), nor none (a ratchet).
       const Scalar length = d.norm(), longest = longest_allowed(s, (positions[i] - positions[j]).norm());
       if (!(length > longest)) continue;
-      const Scalar wi = inverse_mass[i], wj = inverse_mass[j];
+      const Scalar wi = weight(i), wj = weight(j);
       if (!(wi + wj > 0)) continue;  // both ends pinned: their handles decide
       // The ends' relative velocity along the spring less what brings it back to its limit.
       const Vec3 change = ((length - longest) / (h * (wi + wj) * length)) * d;
@@ -43,8 +44,8 @@ StrainSweeps limit_strain_sweeps(const StrainSweepInput& in, std::vector<Vec3>& 
       if (also) (*also)[i] -= wi * change, (*also)[j] += wj * change;
       // A pinned end's handle does work through the spring: the impulse it gives the free
       // end, against the handle's velocity (for the energy ledger).
-      if (wi == 0) done.work += std::max<Scalar>(0, change.dot(motion[i]));
-      if (wj == 0) done.work += std::max<Scalar>(0, -change.dot(motion[j]));
+      if (inverse_mass[i] == 0) done.work += std::max<Scalar>(0, change.dot(motion[i]));
+      if (inverse_mass[j] == 0) done.work += std::max<Scalar>(0, -change.dot(motion[j]));
       ++done.corrections;
       record.changed[i] = record.changed[j] = done.corrections;
       passed = true;
@@ -55,10 +56,10 @@ StrainSweeps limit_strain_sweeps(const StrainSweepInput& in, std::vector<Vec3>& 
 }
 
 Scalar Integrator::limit_strain(const std::vector<Vec3>& positions, std::vector<Vec3>& motion, std::vector<Vec3>* also,
-                                StepReport& report) {
+                                StepReport& report, std::span<const char> held) {
   Workspace& w = *work_;
   const auto begin = std::chrono::steady_clock::now();
-  const StrainSweeps done = limit_strain_sweeps({model_.springs, w.limited_springs, positions, w.inverse_mass, h_, STRAIN_LIMIT_SWEEPS},
+  const StrainSweeps done = limit_strain_sweeps({model_.springs, w.limited_springs, positions, w.inverse_mass, h_, STRAIN_LIMIT_SWEEPS, held},
                                                 motion, also, w.strain_sweeps);
   report.strain_limited += done.corrections;
   report.strain_ms += std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - begin).count();

@@ -33,12 +33,14 @@ struct StrainSweepInput {
   std::span<const Scalar> inverse_mass;  ///< per vertex, 0 at a pinned one
   Scalar h = 0;                          ///< the step, s
   int max_sweeps = 0;
+  std::span<const char> held = {};       ///< per vertex, or empty: 1 where a contact holds it (HELD_WEIGHT)
 };
 
 /// Gauss-Seidel sweeps over the limited springs, at most max_sweeps, until one corrects
 /// nothing: a spring whose length at the step's end (positions + h motion) passes
 /// longest_allowed gets equal and opposite changes of its ends' motion along it by inverse
-/// mass, which end it there; `also`, when given, gets the same changes. A spring none of whose
+/// mass (a held vertex's times HELD_WEIGHT), which end it there; `also`, when given, gets the
+/// same changes. A spring none of whose
 /// ends moved since it was last looked at is passed over (its length is the one found then):
 /// the corrections and their order are those of looking at every spring in every sweep.
 StrainSweeps limit_strain_sweeps(const StrainSweepInput& in, std::vector<Vec3>& motion, std::vector<Vec3>* also,

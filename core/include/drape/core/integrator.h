@@ -133,7 +133,7 @@ class Integrator {
   // step's start may end STRAIN_RECOVERY of its excess shorter. Returns the work the handles
   // did through it (J).
   Scalar limit_strain(const std::vector<Vec3>& positions, std::vector<Vec3>& motion, std::vector<Vec3>* also,
-                      StepReport& report);
+                      StepReport& report, std::span<const char> held = {});
   // Whether a limited spring (structural, or a diagonal under a shear locking angle) ends the
   // step (positions + h motion) past its limit by more than STRAIN_SLACK.
   bool past_limit(const std::vector<Vec3>& positions, const std::vector<Vec3>& motion) const;
@@ -164,6 +164,9 @@ class Integrator {
   // The response to contact: analytic obstacles, then the collision pipeline; changes motion
   // and the state's velocities.
   void respond(State& state, std::vector<Vec3>& motion, StepReport& report);
+  // respond, and with limited springs each free vertex whose motion it changed by more than a
+  // negligible share of the thickness marked in held (strain limiting's rounds, HELD_WEIGHT).
+  void respond_holding(State& state, std::vector<Vec3>& motion, StepReport& report, std::vector<char>& held);
   // The step's positive work of the handles and of the air (with wind), for the energy ledger
   // (StepReport::external_work); velocities are the solve's.
   Scalar source_work(const std::vector<Vec3>& pinned_dv, const std::vector<Vec3>& air_forces,
