@@ -288,13 +288,32 @@ CollisionCounters CollisionPipeline::resolve(const std::vector<Vec3>& start, Sca
   const Scalar separation = SEPARATION_FRACTION * m.model.scene.collisions.thickness / h;
 
   // Proximity repulsion on the first round's candidates, then CCD impulses until no collision.
-  ccd::Candidates first;
-  auto hits = m.detect(h, motion, counters, &first);
-  Impl::ContactSet contacts;
   // Detection is a function of the motion, test by test: a round after the first runs only the
-  // tests with a vertex whose motion changed since the round before (none: its hits stand).
-  std::vector<Vec3> detected = motion;
+  // tests with a vertex whose motion changed since the round before (none: its hits stand), and
+  // so does the first round of a resolve of the step's start again, against the motion the last
+  // one ended with free of collisions (Impl::LastResolve).
   std::vector<std::uint8_t> moved(m.start.size(), 0);
+  Impl::LastResolve& last = m.last;
+  const bool again = m.settings.incremental_rounds && last.clean && last.t == t && last.h == h &&
+                     std::equal(start.begin(), start.begin() + m.cloth_vertices, last.start.begin(), last.start.end());
+  last.clean = false;
+  std::vector<std::pair<Contact, Scalar>> hits;
+  if (again) {
+    for (int v = 0; v < m.cloth_vertices; ++v) moved[std::size_t(v)] = motion[std::size_t(v)] != last.motion[std::size_t(v)];
+    const std::vector<std::pair<Contact, Scalar>> none;
+    hits = m.detect(h, motion, counters, nullptr, &moved, &none);
+    counters.rest_clamped_pairs += last.rest_clamped;
+  } else {
+    ccd::Candidates first;
+    hits = m.detect(h, motion, counters, &first);
+    const long clamped_before = counters.rest_clamped_pairs;
+    last.near = m.near_contacts(first, counters);
+    last.rest_clamped = counters.rest_clamped_pairs - clamped_before;
+    last.t = t, last.h = h;
+    last.start.assign(start.begin(), start.begin() + m.cloth_vertices);
+  }
+  Impl::ContactSet contacts;
+  std::vector<Vec3> detected = motion;
   const auto redetect = [&] {
     bool any = false;
     for (int v = 0; v < m.cloth_vertices; ++v) any |= (moved[std::size_t(v)] = motion[std::size_t(v)] != detected[std::size_t(v)]);
@@ -302,7 +321,7 @@ CollisionCounters CollisionPipeline::resolve(const std::vector<Vec3>& start, Sca
     hits = m.settings.incremental_rounds ? m.detect(h, motion, counters, nullptr, &moved, &hits) : m.detect(h, motion, counters);
     detected = motion;
   };
-  m.repel(first, h, motion, contacts, counters);
+  m.repel(last.near, h, motion, contacts, counters);
   m.keep_out_of_analytic_obstacles(t + h, h, motion);
   redetect();
   for (int round = 0; !hits.empty() && round < m.model.scene.collisions.max_impulse_iterations; ++round) {
@@ -332,6 +351,8 @@ CollisionCounters CollisionPipeline::resolve(const std::vector<Vec3>& start, Sca
       for (int v = 0; v < m.cloth_vertices; ++v)
         if (m.inverse_mass[v] > 0) motion[v] = Vec3::Zero();
   }
+  last.clean = hits.empty();
+  if (last.clean) last.motion.assign(motion.begin(), motion.begin() + m.cloth_vertices);
   counters.response_ms = ms_since(begin) - counters.ccd_ms;
   return counters;
 }

@@ -94,7 +94,7 @@ Scalar CollisionPipeline::Impl::kept_gap(bool vertex_face, const std::array<int,
   return f * std::sqrt(rest_squared);
 }
 
-void CollisionPipeline::Impl::repel(const ccd::Candidates& c, Scalar h, std::vector<Vec3>& motion, ContactSet& set, CollisionCounters& counters) {
+std::vector<Contact> CollisionPipeline::Impl::near_contacts(const ccd::Candidates& c, CollisionCounters& counters) const {
   const Scalar thickness = model.scene.collisions.thickness;
   std::vector<Contact> near;
   const auto push = [&](bool vertex_face, Contact contact, const Vec3& offset) {
@@ -122,6 +122,11 @@ void CollisionPipeline::Impl::repel(const ccd::Candidates& c, Scalar h, std::vec
   }
   // The tests come unsorted (feature_pairs' owners): the contacts in a whole round's order.
   std::sort(near.begin(), near.end(), [&](const Contact& a, const Contact& b) { return listed_before(a, b); });
+  return near;
+}
+
+void CollisionPipeline::Impl::repel(const std::vector<Contact>& near, Scalar h, std::vector<Vec3>& motion, ContactSet& set,
+                                    CollisionCounters& counters) {
   for (const Contact& contact : near) set.add(contact, 0, inverse_mass);
   counters.proximity_impulses += impulses(set, h, motion);
 }
