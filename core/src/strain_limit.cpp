@@ -23,6 +23,12 @@ StrainSweeps limit_strain_sweeps(const StrainSweepInput& in, std::vector<Vec3>& 
   StrainSweeps done;
   record.changed.assign(positions.size(), -1);
   record.checked.assign(limited.size(), -2);
+  // The longest each may end, from its length at the start (fixed through the sweeps).
+  record.longest.resize(limited.size());
+  for (std::size_t l = 0; l < limited.size(); ++l) {
+    const Spring& s = springs[std::size_t(limited[l])];
+    record.longest[l] = longest_allowed(s, (positions[std::size_t(s.i)] - positions[std::size_t(s.j)]).norm());
+  }
   for (int sweep = 0; sweep < max_sweeps; ++sweep) {
     bool passed = false;
     for (std::size_t l = 0; l < limited.size(); ++l) {
@@ -33,7 +39,7 @@ StrainSweeps limit_strain_sweeps(const StrainSweepInput& in, std::vector<Vec3>& 
       const Vec3 d = positions[i] + h * motion[i] - positions[j] - h * motion[j];
       // A spring the response left past its limit is pulled back by STRAIN_RECOVERY of its
       // excess: not all at once (its excess over h as a speed), nor none (a ratchet).
-      const Scalar length = d.norm(), longest = longest_allowed(s, (positions[i] - positions[j]).norm());
+      const Scalar length = d.norm(), longest = record.longest[l];
       if (!(length > longest)) continue;
       const Scalar wi = weight(i), wj = weight(j);
       if (!(wi + wj > 0)) continue;  // both ends pinned: their handles decide

@@ -15,10 +15,11 @@ struct StrainSweeps {
   Scalar work = 0;
 };
 
-/// When each vertex's motion last changed and each limited spring was last looked at, kept
-/// between calls so that its memory is reused.
+/// When each vertex's motion last changed and each limited spring was last looked at, and how
+/// long each may end, kept between calls so that its memory is reused.
 struct StrainSweepRecord {
   std::vector<long> changed, checked;
+  std::vector<Scalar> longest;  ///< per limited spring: longest_allowed at the step's start
 };
 
 /// The longest a limited spring may end a step whose start found it `start` long: its limit,
