@@ -301,14 +301,22 @@ CollisionCounters CollisionPipeline::resolve(const std::vector<Vec3>& start, Sca
   if (again) {
     for (int v = 0; v < m.cloth_vertices; ++v) moved[std::size_t(v)] = motion[std::size_t(v)] != last.motion[std::size_t(v)];
     const std::vector<std::pair<Contact, Scalar>> none;
-    hits = m.detect(h, motion, counters, nullptr, &moved, &none);
-    counters.rest_clamped_pairs += last.rest_clamped;
+    ccd::Candidates changed;
+    hits = m.detect(h, motion, counters, &changed, &moved, &none);
+    // The proximity contacts: the last resolve's without a changed vertex, and those among the
+    // changed tests (the self-collision culling of their patches is the motion's).
+    const auto unchanged = [&](const Contact& c) {
+      return std::none_of(c.vertex.begin(), c.vertex.end(), [&](int v) { return v < m.cloth_vertices && moved[std::size_t(v)]; });
+    };
+    std::vector<Contact> near = m.near_contacts(changed, counters);
+    for (const Contact& c : last.near)
+      if (unchanged(c)) near.push_back(c);
+    std::sort(near.begin(), near.end(), [&](const Contact& a, const Contact& b) { return m.listed_before(a, b); });
+    last.near = std::move(near);
   } else {
     ccd::Candidates first;
     hits = m.detect(h, motion, counters, &first);
-    const long clamped_before = counters.rest_clamped_pairs;
     last.near = m.near_contacts(first, counters);
-    last.rest_clamped = counters.rest_clamped_pairs - clamped_before;
     last.t = t, last.h = h;
     last.start.assign(start.begin(), start.begin() + m.cloth_vertices);
   }

@@ -232,21 +232,20 @@ struct CollisionPipeline::Impl {
   // none.
   void repel(const std::vector<Contact>& near, Scalar h, std::vector<Vec3>& motion, ContactSet& set, CollisionCounters& counters);
   // The features among the candidates closer than their kept gap at the start, repel's
-  // contacts, in a whole round's order: a function of the start alone (a pair that close is a
-  // candidate whatever the motion).
+  // contacts, in a whole round's order.
   std::vector<Contact> near_contacts(const ccd::Candidates& c, CollisionCounters& counters) const;
 
   // The step's last resolve (CollisionPipeline::resolve): its start and time, the motion it
-  // ended with when that was free of collisions (clean), and its proximity contacts with the
-  // pairs among them whose gap came from the rest shape. A resolve of the same start and step
-  // (the integrator's rounds of strain limit and response) detects only the tests with a vertex
-  // whose motion differs from that clean one: the others' features move as they did there.
+  // ended with when that was free of collisions (clean), and its proximity contacts. A resolve
+  // of the same start and step (the integrator's rounds of strain limit and response) detects
+  // only the tests with a vertex whose motion differs from that clean one (the others' features
+  // move as they did there, free of collisions), and keeps the proximity contacts without such
+  // a vertex (with one, the self-collision culling of its patch may differ).
   struct LastResolve {
     bool clean = false;
     Scalar t = 0, h = 0;
     std::vector<Vec3> start, motion;
     std::vector<Contact> near;
-    long rest_clamped = 0;
   } last;
 
   // Rigid impact zones: each zone's cloth vertices move with the zone's rigid motion (its
