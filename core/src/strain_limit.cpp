@@ -19,10 +19,32 @@ StrainSweeps limit_strain_sweeps(const StrainSweepInput& in, std::vector<Vec3>& 
   const auto weight = [&](std::size_t v) { return !held.empty() && held[v] ? HELD_WEIGHT * inverse_mass[v] : inverse_mass[v]; };
   // A spring is looked at again only once an end of it has moved since it was last looked at:
   // a curtain caught on a moving paddle ran its 200 sweeps over all 14,520 springs in every
-  // call for the few dozen along its taut chains, 5.5 s of a 13.9 s frame.
+  // call for the few dozen along its taut chains, 5.5 s of a 13.9 s frame. And a block of
+  // STRAIN_BLOCK springs (in the sweeps' order) none of whose ends has moved since it was last
+  // looked at is passed over whole: a knit hanging from a needle still read every one of its
+  // 10,100 springs in each sweep of its limit's rounds for the few dozen around the tip.
+  const std::size_t count = limited.size(), blocks = (count + STRAIN_BLOCK - 1) / STRAIN_BLOCK;
+  if (record.limited.size() != count || !std::equal(limited.begin(), limited.end(), record.limited.begin()) ||
+      record.first.size() != positions.size() + 1) {
+    // Per vertex, the blocks holding its springs, in order: at[first[v]] ...
+    std::vector<std::vector<int>> of(positions.size());
+    for (std::size_t l = 0; l < count; ++l) {
+      const Spring& s = springs[std::size_t(limited[l])];
+      for (const int v : {s.i, s.j}) {
+        auto& list = of[std::size_t(v)];
+        if (list.empty() || list.back() != int(l / STRAIN_BLOCK)) list.push_back(int(l / STRAIN_BLOCK));
+      }
+    }
+    record.limited.assign(limited.begin(), limited.end());
+    record.first.assign(1, 0);
+    record.at.clear();
+    for (const auto& list : of) record.at.insert(record.at.end(), list.begin(), list.end()), record.first.push_back(int(record.at.size()));
+  }
   StrainSweeps done;
   record.changed.assign(positions.size(), -1);
-  record.checked.assign(limited.size(), -2);
+  record.checked.assign(count, -2);
+  record.block_changed.assign(blocks, -1);
+  record.block_checked.assign(blocks, -2);
   // The longest each may end, from its length at the start (fixed through the sweeps).
   record.longest.resize(limited.size());
   for (std::size_t l = 0; l < limited.size(); ++l) {
@@ -31,7 +53,10 @@ StrainSweeps limit_strain_sweeps(const StrainSweepInput& in, std::vector<Vec3>& 
   }
   for (int sweep = 0; sweep < max_sweeps; ++sweep) {
     bool passed = false;
-    for (std::size_t l = 0; l < limited.size(); ++l) {
+    for (std::size_t b = 0; b < blocks; ++b) {
+    if (record.block_changed[b] <= record.block_checked[b]) continue;
+    record.block_checked[b] = done.corrections;
+    for (std::size_t l = b * STRAIN_BLOCK; l < std::min(count, (b + 1) * STRAIN_BLOCK); ++l) {
       const Spring& s = springs[std::size_t(limited[l])];
       const auto i = std::size_t(s.i), j = std::size_t(s.j);
       if (record.changed[i] <= record.checked[l] && record.changed[j] <= record.checked[l]) continue;
@@ -54,7 +79,10 @@ StrainSweeps limit_strain_sweeps(const StrainSweepInput& in, std::vector<Vec3>& 
       if (inverse_mass[j] == 0) done.work += std::max<Scalar>(0, -change.dot(motion[j]));
       ++done.corrections;
       record.changed[i] = record.changed[j] = done.corrections;
+      for (const std::size_t v : {i, j})
+        for (int k = record.first[v]; k < record.first[v + 1]; ++k) record.block_changed[std::size_t(record.at[std::size_t(k)])] = done.corrections;
       passed = true;
+    }
     }
     if (!passed) break;
   }

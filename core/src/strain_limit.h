@@ -15,12 +15,18 @@ struct StrainSweeps {
   Scalar work = 0;
 };
 
-/// When each vertex's motion last changed and each limited spring was last looked at, and how
-/// long each may end, kept between calls so that its memory is reused.
+/// When each vertex's motion last changed and each limited spring (and block of them) was last
+/// looked at, and how long each may end, kept between calls so that its memory is reused.
 struct StrainSweepRecord {
-  std::vector<long> changed, checked;
-  std::vector<Scalar> longest;  ///< per limited spring: longest_allowed at the step's start
+  std::vector<long> changed, checked;              ///< per vertex, per limited spring
+  std::vector<long> block_changed, block_checked;  ///< per block of STRAIN_BLOCK limited springs
+  std::vector<Scalar> longest;                     ///< per limited spring: longest_allowed at the step's start
+  std::vector<int> limited;                        ///< the limited springs the lists below were made for
+  std::vector<int> first, at;                      ///< per vertex, the blocks of its springs: at[first[v]] ...
 };
+
+/// Limited springs, in the sweeps' order, passed over together when none of their ends moved.
+inline constexpr std::size_t STRAIN_BLOCK = 64;
 
 /// The longest a limited spring may end a step whose start found it `start` long: its limit,
 /// or STRAIN_RECOVERY of its excess shorter when it started past it.
