@@ -305,18 +305,23 @@ CollisionCounters CollisionPipeline::resolve(const std::vector<Vec3>& start, Sca
     hits = m.detect(h, motion, counters, &changed, &moved, &none);
     // The proximity contacts: the last resolve's without a changed vertex, and those among the
     // changed tests (the self-collision culling of their patches is the motion's).
-    const auto unchanged = [&](const Contact& c) {
-      return std::none_of(c.vertex.begin(), c.vertex.end(), [&](int v) { return v < m.cloth_vertices && moved[std::size_t(v)]; });
+    const auto unchanged = [&](const std::array<int, 4>& vertex) {
+      return std::none_of(vertex.begin(), vertex.end(), [&](int v) { return v < m.cloth_vertices && moved[std::size_t(v)]; });
     };
-    std::vector<Contact> near = m.near_contacts(changed, counters);
+    std::vector<std::array<int, 4>> clamped;
+    std::vector<Contact> near = m.near_contacts(changed, counters, &clamped);
     for (const Contact& c : last.near)
-      if (unchanged(c)) near.push_back(c);
+      if (unchanged(c.vertex)) near.push_back(c);
+    for (const auto& pair : last.clamped)
+      if (unchanged(pair)) clamped.push_back(pair), ++counters.rest_clamped_pairs;
     std::sort(near.begin(), near.end(), [&](const Contact& a, const Contact& b) { return m.listed_before(a, b); });
     last.near = std::move(near);
+    last.clamped = std::move(clamped);
   } else {
     ccd::Candidates first;
     hits = m.detect(h, motion, counters, &first);
-    last.near = m.near_contacts(first, counters);
+    last.clamped.clear();
+    last.near = m.near_contacts(first, counters, &last.clamped);
     last.t = t, last.h = h;
     last.start.assign(start.begin(), start.begin() + m.cloth_vertices);
   }

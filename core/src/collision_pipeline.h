@@ -232,20 +232,27 @@ struct CollisionPipeline::Impl {
   // none.
   void repel(const std::vector<Contact>& near, Scalar h, std::vector<Vec3>& motion, ContactSet& set, CollisionCounters& counters);
   // The features among the candidates closer than their kept gap at the start, repel's
-  // contacts, in a whole round's order.
-  std::vector<Contact> near_contacts(const ccd::Candidates& c, CollisionCounters& counters) const;
+  // contacts, in a whole round's order; with clamped, the pairs closer than the thickness whose
+  // gap the rest shape set (counted in rest_clamped_pairs) are added to it.
+  std::vector<Contact> near_contacts(const ccd::Candidates& c, CollisionCounters& counters,
+                                     std::vector<std::array<int, 4>>* clamped = nullptr) const;
 
   // The step's last resolve (CollisionPipeline::resolve): its start and time, the motion it
-  // ended with when that was free of collisions (clean), and its proximity contacts. A resolve
-  // of the same start and step (the integrator's rounds of strain limit and response) detects
-  // only the tests with a vertex whose motion differs from that clean one (the others' features
-  // move as they did there, free of collisions), and keeps the proximity contacts without such
-  // a vertex (with one, the self-collision culling of its patch may differ).
+  // ended with when that was free of collisions (clean), its proximity contacts and the pairs
+  // whose gap the rest shape set. A resolve of the same start and step (the integrator's rounds
+  // of strain limit and response) runs only the tests with a vertex whose motion differs from
+  // that clean one: the others' features move as they did there, free of collisions (but for
+  // a near miss within the narrow phase's tolerance, as between rounds). It keeps the proximity
+  // contacts (and rest-set pairs) without such a vertex and lists the others from the tests it
+  // runs. Not provably a whole detection's list: the self-collision culling that decides which
+  // pairs are listed is a patch's, and a patch whose changed vertices turn its culling could
+  // list or drop a pair of unchanged ones (docs/collisions.md).
   struct LastResolve {
     bool clean = false;
     Scalar t = 0, h = 0;
     std::vector<Vec3> start, motion;
     std::vector<Contact> near;
+    std::vector<std::array<int, 4>> clamped;
   } last;
 
   // Rigid impact zones: each zone's cloth vertices move with the zone's rigid motion (its

@@ -94,13 +94,16 @@ Scalar CollisionPipeline::Impl::kept_gap(bool vertex_face, const std::array<int,
   return f * std::sqrt(rest_squared);
 }
 
-std::vector<Contact> CollisionPipeline::Impl::near_contacts(const ccd::Candidates& c, CollisionCounters& counters) const {
+std::vector<Contact> CollisionPipeline::Impl::near_contacts(const ccd::Candidates& c, CollisionCounters& counters,
+                                                            std::vector<std::array<int, 4>>* clamped) const {
   const Scalar thickness = model.scene.collisions.thickness;
   std::vector<Contact> near;
   const auto push = [&](bool vertex_face, Contact contact, const Vec3& offset) {
     const Scalar distance = offset.norm();
     if (!(distance < thickness) || !(distance > 0)) return;
+    const long clamped_before = counters.rest_clamped_pairs;
     const Scalar gap = kept_gap(vertex_face, contact.vertex, counters);
+    if (clamped && counters.rest_clamped_pairs != clamped_before) clamped->push_back(contact.vertex);
     if (!(distance < gap)) return;
     contact.vertex_face = vertex_face;
     contact.normal = offset / distance;

@@ -94,8 +94,9 @@ TEST(StrainLimit, SweepsThatPassOverUnmovedSpringsCorrectAsEverySpringLookedAtDo
   std::vector<Vec3> everywhere;
   for (std::size_t v = 0; v < positions.size(); ++v) everywhere.emplace_back(speed(rng), speed(rng), speed(rng));
   check("random motion", positions, everywhere);
-  // A few springs pass their limit and the sweeps' work spreads from them: most blocks of
-  // springs are passed over (STRAIN_BLOCK), and a correction must mark both its ends' blocks.
+  // A few springs pass their limit and the sweeps' work spreads from them: blocks of springs
+  // are passed over (STRAIN_BLOCK), and a correction must mark both its ends' blocks (this case
+  // fails when it marks only one end's).
   std::vector<Vec3> flat = positions, few(positions.size(), Vec3::Zero());
   for (int v = 0; v < side * side; ++v) flat[std::size_t(v)] = Vec3(0.01 * (v % side), 0.01 * (v / side), 0);  // at rest
   for (int k = 0; k < 6; ++k) few[std::size_t(rng() % positions.size())] = 3 * Vec3(speed(rng), speed(rng), speed(rng));
