@@ -9,7 +9,8 @@ irregular_cloth.obj: a 1 m square of cloth in z = 0, 48 x 48 cells whose inner v
 moved by up to 0.42 of a cell (a fixed pseudo-random sequence), each cell's diagonal drawn
 either way at random unless that would turn a triangle over: an irregular triangulation of the
 kind a remesher or a garment tool writes (edges from 4.6 to 51 mm). needle.obj: a closed cone
-standing on z = 0, radius 0.01 m at its base and its tip at z = 0.3 m (16 segments around)."""
+standing on z = 0, radius 0.01 m at its base and its tip at z = 0.3 m (16 segments around).
+extra/blade.obj: a closed box 0.002 x 0.8 x 0.3 m centred on the origin."""
 import math, os, random, sys
 
 HERE = os.path.dirname(os.path.abspath(__file__))
@@ -115,3 +116,4 @@ if __name__ == "__main__":
     write("paddle.obj", *paddle(0.8, 0.05, 0.3), "a closed box 0.8 x 0.05 x 0.3 m (bench/user_scenes/make_meshes.py)")
     write("irregular_cloth.obj", *irregular_cloth(), "an irregular triangulation of a 1 m square (bench/user_scenes/make_meshes.py)")
     write("needle.obj", *needle(), "a closed cone 0.3 m tall, 0.01 m in radius at its base (bench/user_scenes/make_meshes.py)")
+    write(os.path.join("extra", "blade.obj"), *paddle(0.002, 0.8, 0.3), "a closed box 0.002 x 0.8 x 0.3 m (bench/user_scenes/make_meshes.py)")
