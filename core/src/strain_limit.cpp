@@ -24,8 +24,14 @@ StrainSweeps limit_strain_sweeps(const StrainSweepInput& in, std::vector<Vec3>& 
   // looked at is passed over whole: a knit hanging from a needle still read every one of its
   // 10,100 springs in each sweep of its limit's rounds for the few dozen around the tip.
   const std::size_t count = limited.size(), blocks = (count + STRAIN_BLOCK - 1) / STRAIN_BLOCK;
-  if (record.limited.size() != count || !std::equal(limited.begin(), limited.end(), record.limited.begin()) ||
-      record.first.size() != positions.size() + 1) {
+  // The lists below are the limited springs' ends': made again when those differ.
+  const auto ends = [&](std::size_t l) {
+    const Spring& s = springs[std::size_t(limited[l])];
+    return std::array<int, 2>{s.i, s.j};
+  };
+  bool same = record.ends.size() == count && record.first.size() == positions.size() + 1;
+  for (std::size_t l = 0; l < count && same; ++l) same = record.ends[l] == ends(l);
+  if (!same) {
     // Per vertex, the blocks holding its springs, in order: at[first[v]] ...
     std::vector<std::vector<int>> of(positions.size());
     for (std::size_t l = 0; l < count; ++l) {
@@ -35,7 +41,8 @@ StrainSweeps limit_strain_sweeps(const StrainSweepInput& in, std::vector<Vec3>& 
         if (list.empty() || list.back() != int(l / STRAIN_BLOCK)) list.push_back(int(l / STRAIN_BLOCK));
       }
     }
-    record.limited.assign(limited.begin(), limited.end());
+    record.ends.resize(count);
+    for (std::size_t l = 0; l < count; ++l) record.ends[l] = ends(l);
     record.first.assign(1, 0);
     record.at.clear();
     for (const auto& list : of) record.at.insert(record.at.end(), list.begin(), list.end()), record.first.push_back(int(record.at.size()));

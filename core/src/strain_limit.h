@@ -2,6 +2,7 @@
 // plain Gauss-Seidel sweep: docs/materials.md.
 #pragma once
 
+#include <array>
 #include <span>
 #include <vector>
 
@@ -21,7 +22,7 @@ struct StrainSweepRecord {
   std::vector<long> changed, checked;              ///< per vertex, per limited spring
   std::vector<long> block_changed, block_checked;  ///< per block of STRAIN_BLOCK limited springs
   std::vector<Scalar> longest;                     ///< per limited spring: longest_allowed at the step's start
-  std::vector<int> limited;                        ///< the limited springs the lists below were made for
+  std::vector<std::array<int, 2>> ends;            ///< the limited springs' ends the lists below were made for
   std::vector<int> first, at;                      ///< per vertex, the blocks of its springs: at[first[v]] ...
 };
 
