@@ -34,15 +34,14 @@ StrainSweeps limit_strain_sweeps(const StrainSweepInput& in, std::vector<Vec3>& 
   if (!same) {
     // Per vertex, the blocks holding its springs, in order: at[first[v]] ...
     std::vector<std::vector<int>> of(positions.size());
+    record.ends.resize(count);
     for (std::size_t l = 0; l < count; ++l) {
-      const Spring& s = springs[std::size_t(limited[l])];
-      for (const int v : {s.i, s.j}) {
+      record.ends[l] = ends(l);
+      for (const int v : record.ends[l]) {
         auto& list = of[std::size_t(v)];
         if (list.empty() || list.back() != int(l / STRAIN_BLOCK)) list.push_back(int(l / STRAIN_BLOCK));
       }
     }
-    record.ends.resize(count);
-    for (std::size_t l = 0; l < count; ++l) record.ends[l] = ends(l);
     record.first.assign(1, 0);
     record.at.clear();
     for (const auto& list : of) record.at.insert(record.at.end(), list.begin(), list.end()), record.first.push_back(int(record.at.size()));
@@ -53,43 +52,43 @@ StrainSweeps limit_strain_sweeps(const StrainSweepInput& in, std::vector<Vec3>& 
   record.block_changed.assign(blocks, -1);
   record.block_checked.assign(blocks, -2);
   // The longest each may end, from its length at the start (fixed through the sweeps).
-  record.longest.resize(limited.size());
-  for (std::size_t l = 0; l < limited.size(); ++l) {
+  record.longest.resize(count);
+  for (std::size_t l = 0; l < count; ++l) {
     const Spring& s = springs[std::size_t(limited[l])];
     record.longest[l] = longest_allowed(s, (positions[std::size_t(s.i)] - positions[std::size_t(s.j)]).norm());
   }
   for (int sweep = 0; sweep < max_sweeps; ++sweep) {
     bool passed = false;
     for (std::size_t b = 0; b < blocks; ++b) {
-    if (record.block_changed[b] <= record.block_checked[b]) continue;
-    record.block_checked[b] = done.corrections;
-    for (std::size_t l = b * STRAIN_BLOCK; l < std::min(count, (b + 1) * STRAIN_BLOCK); ++l) {
-      const Spring& s = springs[std::size_t(limited[l])];
-      const auto i = std::size_t(s.i), j = std::size_t(s.j);
-      if (record.changed[i] <= record.checked[l] && record.changed[j] <= record.checked[l]) continue;
-      record.checked[l] = done.corrections;
-      const Vec3 d = positions[i] + h * motion[i] - positions[j] - h * motion[j];
-      // A spring the response left past its limit is pulled back by STRAIN_RECOVERY of its
-      // excess: not all at once (its excess over h as a speed), nor none (a ratchet).
-      const Scalar length = d.norm(), longest = record.longest[l];
-      if (!(length > longest)) continue;
-      const Scalar wi = weight(i), wj = weight(j);
-      if (!(wi + wj > 0)) continue;  // both ends pinned: their handles decide
-      // The ends' relative velocity along the spring less what brings it back to its limit.
-      const Vec3 change = ((length - longest) / (h * (wi + wj) * length)) * d;
-      motion[i] -= wi * change;
-      motion[j] += wj * change;
-      if (also) (*also)[i] -= wi * change, (*also)[j] += wj * change;
-      // A pinned end's handle does work through the spring: the impulse it gives the free
-      // end, against the handle's velocity (for the energy ledger).
-      if (inverse_mass[i] == 0) done.work += std::max<Scalar>(0, change.dot(motion[i]));
-      if (inverse_mass[j] == 0) done.work += std::max<Scalar>(0, -change.dot(motion[j]));
-      ++done.corrections;
-      record.changed[i] = record.changed[j] = done.corrections;
-      for (const std::size_t v : {i, j})
-        for (int k = record.first[v]; k < record.first[v + 1]; ++k) record.block_changed[std::size_t(record.at[std::size_t(k)])] = done.corrections;
-      passed = true;
-    }
+      if (record.block_changed[b] <= record.block_checked[b]) continue;
+      record.block_checked[b] = done.corrections;
+      for (std::size_t l = b * STRAIN_BLOCK; l < std::min(count, (b + 1) * STRAIN_BLOCK); ++l) {
+        const Spring& s = springs[std::size_t(limited[l])];
+        const auto i = std::size_t(s.i), j = std::size_t(s.j);
+        if (record.changed[i] <= record.checked[l] && record.changed[j] <= record.checked[l]) continue;
+        record.checked[l] = done.corrections;
+        const Vec3 d = positions[i] + h * motion[i] - positions[j] - h * motion[j];
+        // A spring the response left past its limit is pulled back by STRAIN_RECOVERY of its
+        // excess: not all at once (its excess over h as a speed), nor none (a ratchet).
+        const Scalar length = d.norm(), longest = record.longest[l];
+        if (!(length > longest)) continue;
+        const Scalar wi = weight(i), wj = weight(j);
+        if (!(wi + wj > 0)) continue;  // both ends pinned: their handles decide
+        // The ends' relative velocity along the spring less what brings it back to its limit.
+        const Vec3 change = ((length - longest) / (h * (wi + wj) * length)) * d;
+        motion[i] -= wi * change;
+        motion[j] += wj * change;
+        if (also) (*also)[i] -= wi * change, (*also)[j] += wj * change;
+        // A pinned end's handle does work through the spring: the impulse it gives the free
+        // end, against the handle's velocity (for the energy ledger).
+        if (inverse_mass[i] == 0) done.work += std::max<Scalar>(0, change.dot(motion[i]));
+        if (inverse_mass[j] == 0) done.work += std::max<Scalar>(0, -change.dot(motion[j]));
+        ++done.corrections;
+        record.changed[i] = record.changed[j] = done.corrections;
+        for (const std::size_t v : {i, j})
+          for (int k = record.first[v]; k < record.first[v + 1]; ++k) record.block_changed[std::size_t(record.at[std::size_t(k)])] = done.corrections;
+        passed = true;
+      }
     }
     if (!passed) break;
   }

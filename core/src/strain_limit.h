@@ -48,9 +48,9 @@ struct StrainSweepInput {
 /// nothing: a spring whose length at the step's end (positions + h motion) passes
 /// longest_allowed gets equal and opposite changes of its ends' motion along it by inverse
 /// mass (a held vertex's times HELD_WEIGHT), which end it there; `also`, when given, gets the
-/// same changes. A spring none of whose
-/// ends moved since it was last looked at is passed over (its length is the one found then):
-/// the corrections and their order are those of looking at every spring in every sweep.
+/// same changes. A spring none of whose ends moved since it was last looked at is passed over
+/// (its length is the one found then): the corrections and their order are those of looking at
+/// every spring in every sweep.
 StrainSweeps limit_strain_sweeps(const StrainSweepInput& in, std::vector<Vec3>& motion, std::vector<Vec3>* also,
                                  StrainSweepRecord& record);
 
