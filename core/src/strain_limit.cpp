@@ -15,7 +15,15 @@ Scalar longest_allowed(const Spring& s, Scalar start) {
 
 StrainSweeps limit_strain_sweeps(const StrainSweepInput& in, std::vector<Vec3>& motion, std::vector<Vec3>* also,
                                  StrainSweepRecord& record) {
-  const auto& [springs, limited, positions, inverse_mass, h, max_sweeps, held] = in;
+  // Named copies, not a structured binding: clang 14 (the fuzzers' build) does not let a
+  // lambda capture a structured binding.
+  const auto springs = in.springs;
+  const auto limited = in.limited;
+  const auto positions = in.positions;
+  const auto inverse_mass = in.inverse_mass;
+  const Scalar h = in.h;
+  const int max_sweeps = in.max_sweeps;
+  const auto held = in.held;
   const auto weight = [&](std::size_t v) { return !held.empty() && held[v] ? HELD_WEIGHT * inverse_mass[v] : inverse_mass[v]; };
   // A spring is looked at again only once an end of it has moved since it was last looked at:
   // a curtain caught on a moving paddle ran its 200 sweeps over all 14,520 springs in every
