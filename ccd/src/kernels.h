@@ -1,6 +1,7 @@
 #pragma once
-// Internal to ccd/: the SIMD kernels of the filter and its separation stage, written once with
-// Google Highway (kernels_batch.cpp, kernels_one_query.cpp, their lane helpers in lanes-inl.h)
+// Internal to ccd/: the SIMD kernels of the filter and its separation stage, and the
+// self-collision culling's normal cones, written once with Google Highway (kernels_batch.cpp,
+// kernels_one_query.cpp, kernels_cones.cpp, their lane helpers in lanes-inl.h)
 // and compiled for every instruction set Highway targets here
 // (its portable one-lane code, SSE4, AVX2, AVX-512), the best one chosen at run time. Every
 // kernel gives the scalar code's bits and decisions on every target: the same operations in
@@ -21,6 +22,7 @@ inline std::array<std::int32_t, 4> points(const VertexFacePair& p) { return {p.v
 inline std::array<std::int32_t, 4> points(const EdgeEdgePair& p) {
   return {p.edge_a[0], p.edge_a[1], p.edge_b[0], p.edge_b[1]};
 }
+inline const std::array<std::int32_t, 3>& points(const std::array<std::int32_t, 3>& triangle) { return triangle; }
 
 /// Tests whose cubics a batch computes together, a test per SIMD lane.
 constexpr std::size_t CHUNK = 64;
@@ -82,6 +84,30 @@ bool one_query_cubic(QueryKind kind, const Query& query, bool cull, CoplanarityC
 /// the target has four lanes of doubles: with need_given need is the query's gap and margin,
 /// else need holds the gap and receives the gap and margin.
 bool one_query_boxes_apart(QueryKind kind, const Query& q, Scalar lo, Scalar hi, bool need_given, Scalar& need);
+
+/// The normal cones of a patch tree's leaves (patch_tree.cpp), a leaf per lane. The least
+/// cosine, between a cone's axis and any normal coefficient, of a cone that counts as within 90
+/// degrees (89.99994 degrees): far above the error of the computed directions, which DEGENERATE
+/// bounds. A normal coefficient shorter than DEGENERATE times the product of its edges' lengths
+/// is a degenerate triangle whose computed direction means nothing: its patches are never culled.
+constexpr Scalar CONE_MARGIN = 1e-6;
+constexpr Scalar DEGENERATE = 1e-8;
+/// Triangles a leaf holds at most (PatchTree's leaves hold no more).
+constexpr std::int32_t CONE_LEAF_TRIANGLES = 8;
+/// Leaf l's cone over a step: sum, the sum of its triangles' normal coefficients (each
+/// triangle's normal (x1 - x0) x (x2 - x0), a quadratic in t over the step, by its three
+/// Bernstein coefficients, which bound it); axis, the sum's direction ((0, 0, 1) when it is
+/// zero); cos and sin of the least angle between the axis and any coefficient, and bit l of ok
+/// when every coefficient is within 90 degrees of it by CONE_MARGIN and none is degenerate
+/// (cos 0 otherwise).
+struct ChunkCones {
+  alignas(64) Scalar sum[3][CHUNK], axis[3][CHUNK], cos[CHUNK], sin[CHUNK];
+  std::uint64_t ok = 0;
+};
+/// The cones of leaves [0, n), n <= CHUNK: leaf l's triangles are triangles[first[l],
+/// first[l] + count[l]), 1 <= count[l] <= CONE_LEAF_TRIANGLES, their corners at start and end.
+void chunk_cones(const Vec3* start, const Vec3* end, const std::array<std::int32_t, 3>* triangles,
+                 const std::int32_t* first, const std::int32_t* count, std::size_t n, ChunkCones& c);
 
 /// For tests: the targets this build compiled and this machine runs, best first (the last is
 /// the portable one-lane code); restricting the kernels to one of them (0: all again); the

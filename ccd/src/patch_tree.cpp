@@ -11,19 +11,14 @@
 #include <numeric>
 #include <tuple>
 
+#include "kernels.h"
 #include "sorted_pairs.h"
 
 namespace drape::ccd {
 
 namespace {
 
-// The least cosine, between a cone's axis and any normal coefficient, of a cone that counts as
-// within 90 degrees (89.99994 degrees): far above the error of the computed directions, which
-// DEGENERATE bounds.
-constexpr Scalar CONE_MARGIN = 1e-6;
-// A normal coefficient shorter than this times the product of its edges' lengths is a
-// degenerate triangle whose computed direction means nothing: its patches are never culled.
-constexpr Scalar DEGENERATE = 1e-8;
+using detail::CONE_MARGIN;
 // A contour edge's signed area around the star's centre must exceed this times the product of
 // the two corners' distances from it (far above the rounding error of the determinant).
 constexpr Scalar STAR_MARGIN = 1e-9;
@@ -134,7 +129,7 @@ std::vector<std::pair<std::int32_t, std::int32_t>> PatchTree::self_pairs(std::sp
         continue;
       }
       for (std::int32_t k = node.first; k < node.first + node.count; ++k) {
-        const TriangleIndices& t = triangles_[std::size_t(order_[std::size_t(k)])];
+        const TriangleIndices& t = ordered_[std::size_t(k)];
         m.triangle_moved[std::size_t(k)] = moved[std::size_t(t[0])] || moved[std::size_t(t[1])] || moved[std::size_t(t[2])];
         m.node_moved[i] = m.node_moved[i] || m.triangle_moved[std::size_t(k)];
       }
@@ -146,56 +141,44 @@ std::vector<std::pair<std::int32_t, std::int32_t>> PatchTree::self_pairs(std::sp
   m.cos.resize(nodes);
   m.sin.resize(nodes);
   m.cone_ok.resize(nodes);
-  // The leaves: their triangles' boxes and normal cones.
-  const std::vector<std::int32_t>& leaves = leaves_;
-  const auto leaf = [&](std::int32_t index) {
-    const Node& node = nodes_[std::size_t(index)];
-    std::array<Vec3, 3 * LEAF_TRIANGLES> coefficient;
-    std::array<Scalar, 3 * LEAF_TRIANGLES> scale_squared;
-    Vec3 sum = Vec3::Zero();
-    for (std::int32_t k = 0; k < node.count; ++k) {
-      const TriangleIndices& tri = triangles_[std::size_t(order_[std::size_t(node.first + k)])];
-      // The normal (x1 - x0) x (x2 - x0) over the step, in Bernstein form of degree 2.
-      const Vec3 e0 = start[tri[1]] - start[tri[0]], f0 = start[tri[2]] - start[tri[0]];
-      const Vec3 e1 = end[tri[1]] - end[tri[0]], f1 = end[tri[2]] - end[tri[0]];
-      coefficient[3 * k] = e0.cross(f0);
-      coefficient[3 * k + 1] = 0.5 * (e0.cross(f1) + e1.cross(f0));
-      coefficient[3 * k + 2] = e1.cross(f1);
-      const Scalar se0 = e0.squaredNorm(), sf0 = f0.squaredNorm(), se1 = e1.squaredNorm(), sf1 = f1.squaredNorm();
-      scale_squared[3 * k] = se0 * sf0;
-      scale_squared[3 * k + 1] = 0.5 * (se0 * sf1 + se1 * sf0);
-      scale_squared[3 * k + 2] = se1 * sf1;
-      sum += coefficient[3 * k] + coefficient[3 * k + 1] + coefficient[3 * k + 2];
+  // The leaves' normal cones, a chunk of leaves at a time (kernels_cones.cpp).
+  static_assert(LEAF_TRIANGLES <= detail::CONE_LEAF_TRIANGLES, "a leaf's triangles fit the cones' kernel");
+  const auto leaf_cones = [&](std::size_t begin, std::size_t stop) {
+    detail::ChunkCones cones;
+    for (std::size_t b = begin; b < stop; b += detail::CHUNK) {
+      const std::size_t n = std::min(detail::CHUNK, stop - b);
+      detail::chunk_cones(start.data(), end.data(), ordered_.data(), leaf_first_.data() + b, leaf_count_.data() + b, n, cones);
+      for (std::size_t j = 0; j < n; ++j) {
+        const std::size_t index = std::size_t(leaves_[b + j]);
+        m.sum[index] = Vec3(cones.sum[0][j], cones.sum[1][j], cones.sum[2][j]);
+        m.axis[index] = Vec3(cones.axis[0][j], cones.axis[1][j], cones.axis[2][j]);
+        m.cos[index] = cones.cos[j];
+        m.sin[index] = cones.sin[j];
+        m.cone_ok[index] = (cones.ok >> j) & 1;
+      }
     }
-    m.sum[std::size_t(index)] = sum;
-    const Scalar length = sum.norm();
-    bool ok = length > 0;
-    const Vec3 axis = ok ? Vec3(sum / length) : Vec3::UnitZ();
-    // The least cosine to the axis, squared (all coefficients on the axis' side).
-    Scalar least_squared = 1;
-    for (std::int32_t c = 0; c < 3 * node.count && ok; ++c) {
-      const Scalar along = coefficient[std::size_t(c)].dot(axis), norm_squared = coefficient[std::size_t(c)].squaredNorm();
-      ok = along > 0 && norm_squared > DEGENERATE * DEGENERATE * scale_squared[std::size_t(c)];
-      least_squared = std::min(least_squared, along * along / norm_squared);
-    }
-    const Scalar least = ok ? std::sqrt(least_squared) : 0;
-    ok = ok && least > CONE_MARGIN;
-    m.axis[std::size_t(index)] = axis;
-    m.cos[std::size_t(index)] = least;
-    m.sin[std::size_t(index)] = std::sqrt(std::max(Scalar(0), 1 - least * least));
-    m.cone_ok[std::size_t(index)] = ok;
   };
+  if (threads > 1) {
+    tbb::task_arena arena(threads);
+    arena.execute([&] {
+      tbb::parallel_for(tbb::blocked_range<std::size_t>(0, leaves_.size(), detail::CHUNK),
+                        [&](const auto& r) { leaf_cones(r.begin(), r.end()); });
+    });
+  } else {
+    leaf_cones(0, leaves_.size());
+  }
   // Their triangles' boxes, and the leaves' boxes.
   const auto leaf_boxes = [&](std::int32_t index) {
     const Node& node = nodes_[std::size_t(index)];
     Aabb box;
     for (std::int32_t k = 0; k < node.count; ++k) {
       Aabb& b = m.triangle_box[std::size_t(node.first + k)];
-      b = swept_box(triangles_[std::size_t(order_[std::size_t(node.first + k)])], start, end, margin);
+      b = swept_box(ordered_[std::size_t(node.first + k)], start, end, margin);
       box = k == 0 ? b : merged(box, b);
     }
     m.box[std::size_t(index)] = box;
   };
+  const std::vector<std::int32_t>& leaves = leaves_;
   const auto for_leaves = [&](const auto& body) {
     if (threads > 1) {
       tbb::task_arena arena(threads);
@@ -208,7 +191,6 @@ std::vector<std::pair<std::int32_t, std::int32_t>> PatchTree::self_pairs(std::sp
       for (std::int32_t index : leaves) body(index);
     }
   };
-  for_leaves(leaf);
   // The inner nodes, children first (they follow their parent): merged boxes, and a cone about
   // the summed axis wide enough for both children's cones (angles add).
   for (std::size_t i = nodes; i-- > 0;) {

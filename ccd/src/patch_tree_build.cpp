@@ -54,7 +54,13 @@ PatchTree::PatchTree(std::span<const TriangleIndices> triangles, std::span<const
   order_.reserve(std::size_t(n));
   build(all, scratch, reference);
   for (std::size_t i = 0; i < nodes_.size(); ++i)
-    if (nodes_[i].right < 0) leaves_.push_back(std::int32_t(i));
+    if (nodes_[i].right < 0) {
+      leaves_.push_back(std::int32_t(i));
+      leaf_first_.push_back(nodes_[i].first);
+      leaf_count_.push_back(nodes_[i].count);
+    }
+  ordered_.reserve(order_.size());
+  for (const std::int32_t t : order_) ordered_.push_back(triangles_[std::size_t(t)]);
   build_orphans();
 }
 
@@ -116,7 +122,7 @@ void PatchTree::build_orphans() {
 bool PatchTree::lists(const Motion& m, std::int32_t i, std::int32_t j) const {
   if (!m.keeps(i, j) || !overlap(m.triangle_box[std::size_t(i)], m.triangle_box[std::size_t(j)])) return false;
   if (!m.skip_adjacent) return true;
-  const TriangleIndices &a = triangles_[std::size_t(order_[std::size_t(i)])], &b = triangles_[std::size_t(order_[std::size_t(j)])];
+  const TriangleIndices &a = ordered_[std::size_t(i)], &b = ordered_[std::size_t(j)];
   for (std::int32_t v : a)
     if (v == b[0] || v == b[1] || v == b[2]) return false;  // sharing a corner: the orphan sets' tests
   return true;

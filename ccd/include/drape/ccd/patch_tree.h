@@ -133,6 +133,10 @@ class PatchTree {
   std::vector<std::int32_t> contours_;  // the disks' boundary vertices, counter-clockwise about their normals
   std::vector<Node> nodes_;             // depth first: a node's left child follows it
   std::vector<std::int32_t> leaves_;    // the leaf nodes
+  // The triangles in order_'s order (triangles_[order_[k]]), and for the cones' kernel each
+  // leaf's first and count in it.
+  std::vector<TriangleIndices> ordered_;
+  std::vector<std::int32_t> leaf_first_, leaf_count_;
   Motion motion_;
 };
 
