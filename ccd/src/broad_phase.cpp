@@ -277,21 +277,39 @@ Candidates features_of(std::span<const TriangleIndices> triangles_a, std::span<c
       tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, PAIR_CHUNK), [&](const auto& r) { body(r.begin(), r.end()); });
     });
   };
-  const auto volumes_of = [&](std::span<const TriangleIndices> triangles) {
-    std::vector<TriangleVolumes> volumes(cull ? triangles.size() : 0);
-    chunks(volumes.size(), [&](std::size_t begin, std::size_t end) {
-      for (std::size_t t = begin; t < end; ++t) {
-        const TriangleIndices& tri = triangles[t];
-        volumes[t].face = union_of(tri);
-        for (int i = 0; i < 3; ++i) volumes[t].edge[i] = union_of(std::array<std::int32_t, 2>{tri[i], tri[(i + 1) % 3]});
+  // Only the triangles the pairs hold: a later round's few pairs on a large mesh (a knit
+  // caught on a needle) made every triangle's volumes in every call. slot[t]: triangle t's
+  // place in volumes, or -1.
+  struct Volumes {
+    std::vector<std::int32_t> slot;
+    std::vector<TriangleVolumes> volumes;
+  };
+  const bool same_triangles = triangles_a.data() == triangles_b.data() && triangles_a.size() == triangles_b.size();
+  const auto volumes_of = [&](std::span<const TriangleIndices> triangles, bool side_a, bool side_b) {
+    Volumes v;
+    if (!cull) return v;
+    v.slot.assign(triangles.size(), -1);
+    std::vector<std::int32_t> held;
+    const auto hold = [&](std::int32_t t) {
+      if (v.slot[std::size_t(t)] < 0) v.slot[std::size_t(t)] = std::int32_t(held.size()), held.push_back(t);
+    };
+    for (const auto& [ia, ib] : pairs) {
+      if (side_a) hold(ia);
+      if (side_b) hold(ib);
+    }
+    v.volumes.resize(held.size());
+    chunks(held.size(), [&](std::size_t begin, std::size_t end) {
+      for (std::size_t k = begin; k < end; ++k) {
+        const TriangleIndices& tri = triangles[std::size_t(held[k])];
+        v.volumes[k].face = union_of(tri);
+        for (int i = 0; i < 3; ++i) v.volumes[k].edge[i] = union_of(std::array<std::int32_t, 2>{tri[i], tri[(i + 1) % 3]});
       }
     });
-    return volumes;
+    return v;
   };
-  const std::vector<TriangleVolumes> volumes_a = volumes_of(triangles_a);
-  const bool same_triangles = triangles_a.data() == triangles_b.data() && triangles_a.size() == triangles_b.size();
-  const std::vector<TriangleVolumes> volumes_b = same_triangles ? std::vector<TriangleVolumes>{} : volumes_of(triangles_b);
-  const std::vector<TriangleVolumes>& of_b = same_triangles ? volumes_a : volumes_b;
+  const Volumes volumes_a = volumes_of(triangles_a, true, same_triangles);
+  const Volumes volumes_b = same_triangles ? Volumes{} : volumes_of(triangles_b, false, true);
+  const Volumes& of_b = same_triangles ? volumes_a : volumes_b;
   const Shrink shrink(rest ? *rest : RestGaps{{}, {}, 1, 1, 0});
   using Key = std::array<std::int32_t, 4>;  // (vertex, face corners) and (edge, edge), canonical
   const auto shares = [](std::int32_t v, const TriangleIndices& t) { return v == t[0] || v == t[1] || v == t[2]; };
@@ -323,8 +341,8 @@ Candidates features_of(std::span<const TriangleIndices> triangles_a, std::span<c
       const auto& [ia, ib] = pairs[p];
       const TriangleIndices& a = triangles_a[ia];
       const TriangleIndices& b = triangles_b[ib];
-      const TriangleVolumes* va = cull ? &volumes_a[ia] : nullptr;
-      const TriangleVolumes* vb = cull ? &of_b[ib] : nullptr;
+      const TriangleVolumes* va = cull ? &volumes_a.volumes[std::size_t(volumes_a.slot[std::size_t(ia)])] : nullptr;
+      const TriangleVolumes* vb = cull ? &of_b.volumes[std::size_t(of_b.slot[std::size_t(ib)])] : nullptr;
       // The corners' rest distances, computed when a test first needs them.
       CornerDistances d;
       bool measured = false;
