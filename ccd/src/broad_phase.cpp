@@ -201,6 +201,32 @@ std::vector<std::pair<std::int32_t, std::int32_t>> BoxTree::pairs_with(const Box
   return std::move(collector.pairs);
 }
 
+std::vector<std::pair<std::int32_t, std::int32_t>> BoxTree::pairs_with_boxes(std::span<const Aabb> boxes,
+                                                                             std::span<const std::int32_t> which) const {
+  std::vector<std::pair<std::int32_t, std::int32_t>> pairs;
+  const btDbvtNode* root = impl_->tree.m_root;
+  if (!root) return pairs;
+  // Down from the root through every node whose box meets the query's (btDbvt's own test, as
+  // collideTT makes it between two trees' leaves).
+  std::vector<const btDbvtNode*> stack;
+  for (const std::int32_t i : which) {
+    const btDbvtVolume query = volume_of(boxes[std::size_t(i)]);
+    stack.assign(1, root);
+    while (!stack.empty()) {
+      const btDbvtNode* node = stack.back();
+      stack.pop_back();
+      if (!Intersect(node->volume, query)) continue;
+      if (node->isinternal()) {
+        stack.push_back(node->childs[0]), stack.push_back(node->childs[1]);
+        continue;
+      }
+      pairs.emplace_back(i, static_cast<std::int32_t>(reinterpret_cast<std::intptr_t>(node->data)));
+    }
+  }
+  sort_pairs(pairs);
+  return pairs;
+}
+
 FeatureOwners feature_owners(std::span<const TriangleIndices> triangles) {
   FeatureOwners owners;
   owners.bits.assign(triangles.size(), 0);

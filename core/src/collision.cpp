@@ -33,6 +33,10 @@ void CollisionCounters::add(const CollisionCounters& o) {
 
 namespace {
 
+// A mesh obstacle whose swept box meets at most this share (one in FEW_BOXES_SHARE) of the
+// cloth's triangle boxes finds its pairs by those boxes alone, without the cloth's tree.
+constexpr std::size_t FEW_BOXES_SHARE = 4;
+
 // The cloths' shortest edge at rest.
 Scalar shortest_rest_edge(const Model& model) {
   Scalar shortest = std::numeric_limits<Scalar>::infinity();
@@ -138,11 +142,13 @@ ccd::Candidates CollisionPipeline::Impl::candidates(Scalar reach, CollisionCount
     return box;
   };
   std::vector<std::uint8_t> near_cloth(obstacles.size(), 0);
+  std::vector<ccd::Aabb> obstacle_range(obstacles.size());
   if (with_obstacles && !obstacles.empty() && cloth_vertices > 0) {
     const ccd::Aabb cloth_box = swept_range(0, cloth_vertices);
     for (std::size_t k = 0; k < obstacles.size(); ++k) {
       const int count = int(obstacles[k].obstacle->mesh.vertices.size());
-      near_cloth[k] = count > 0 && ccd::overlap(cloth_box, swept_range(obstacles[k].first_vertex, count));
+      if (count > 0) obstacle_range[k] = swept_range(obstacles[k].first_vertex, count);
+      near_cloth[k] = count > 0 && ccd::overlap(cloth_box, obstacle_range[k]);
     }
   }
   const bool any_near = std::any_of(near_cloth.begin(), near_cloth.end(), [](std::uint8_t n) { return n != 0; });
@@ -160,8 +166,22 @@ ccd::Candidates CollisionPipeline::Impl::candidates(Scalar reach, CollisionCount
     boxes.resize(tree_triangles.size());
     for (std::size_t k = 0; k < tree_triangles.size(); ++k)
       boxes[k] = ccd::swept_box(cloth_triangles[std::size_t(tree_triangles[k])], start, end, margin);
-    if (!boxes.empty()) cloth_tree.update(boxes);
   }
+  // An obstacle whose swept box meets few of the cloth's boxes (a needle, a paddle under a
+  // large cloth) takes those boxes down its own tree, one at a time: the cloth's tree is then
+  // neither refitted nor traversed for it (the same pairs). Only its boxes can meet the
+  // obstacle's triangles' boxes, which its swept box holds.
+  std::vector<std::vector<std::int32_t>> near_boxes(obstacles.size());
+  std::vector<std::uint8_t> by_boxes(obstacles.size(), 0);
+  bool cloth_tree_used = self_pairs && !culling;
+  for (std::size_t k = 0; k < obstacles.size(); ++k) {
+    if (!near_cloth[k] || boxes.empty()) continue;
+    for (std::size_t i = 0; i < boxes.size(); ++i)
+      if (ccd::overlap(boxes[i], obstacle_range[k])) near_boxes[k].push_back(std::int32_t(i));
+    by_boxes[k] = near_boxes[k].size() * FEW_BOXES_SHARE <= boxes.size();
+    cloth_tree_used = cloth_tree_used || !by_boxes[k];
+  }
+  if (cloth_tree_used && !boxes.empty()) cloth_tree.update(boxes);
   bool features_ready = false;
   const auto make_features = [&] {
     if (features_ready) return;
@@ -213,7 +233,7 @@ ccd::Candidates CollisionPipeline::Impl::candidates(Scalar reach, CollisionCount
     std::vector<ccd::Aabb> obstacle_boxes(mo.triangles.size());
     for (std::size_t i = 0; i < mo.triangles.size(); ++i) obstacle_boxes[i] = ccd::swept_box(mo.triangles[i], start, end, margin);
     mo.tree.update(obstacle_boxes);
-    auto pairs = cloth_tree.pairs_with(mo.tree);
+    auto pairs = by_boxes[k] ? mo.tree.pairs_with_boxes(boxes, near_boxes[k]) : cloth_tree.pairs_with(mo.tree);
     for (auto& [cloth, obstacle] : pairs) cloth = tree_triangles[std::size_t(cloth)];  // increasing: still sorted
     append(mo.triangles, mo.owners, pairs, nullptr);
   }

@@ -57,6 +57,31 @@ TEST(BroadPhase, PairsBetweenTwoTreesAcrossUpdates) {
   }
 }
 
+TEST(BroadPhase, PairsWithBoxesAreThoseOfATreeOfThem) {
+  std::mt19937_64 rng(10);
+  BoxTree tb;
+  for (int round = 0; round < 4; ++round) {
+    auto a = random_boxes(rng, 200);
+    const auto b = random_boxes(rng, 150);
+    // Some boxes touching a leaf's face exactly: overlap counts a shared face, as btDbvt does.
+    for (int i = 0; i < 10; ++i) a[std::size_t(i)].min.x() = b[std::size_t(i)].max.x();
+    tb.update(b);
+    std::vector<std::int32_t> which;
+    for (std::int32_t i = 0; i < 200; i += 1 + round) which.push_back(i);
+    std::vector<std::pair<std::int32_t, std::int32_t>> expected;
+    for (const std::int32_t i : which)
+      for (int j = 0; j < 150; ++j)
+        if (overlap(a[std::size_t(i)], b[std::size_t(j)])) expected.emplace_back(i, j);
+    EXPECT_EQ(tb.pairs_with_boxes(a, which), expected) << "round " << round;
+    if (round == 0) {  // every box: what a tree of them finds against this one
+      BoxTree ta;
+      ta.update(a);
+      EXPECT_EQ(tb.pairs_with_boxes(a, which), ta.pairs_with(tb));
+    }
+  }
+  EXPECT_TRUE(BoxTree().pairs_with_boxes(random_boxes(rng, 3), std::vector<std::int32_t>{0, 1, 2}).empty());
+}
+
 TEST(BroadPhase, SweptBoxCoversBothEndsAndTheMargin) {
   const std::vector<Vec3> start{Vec3(0, 0, 0), Vec3(1, 0, 0), Vec3(0, 1, 0)};
   const std::vector<Vec3> end{Vec3(0, 0, 2), Vec3(1, 0, 2), Vec3(0, 1, -1)};
