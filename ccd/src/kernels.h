@@ -97,9 +97,9 @@ constexpr std::int32_t CONE_LEAF_TRIANGLES = 8;
 /// Leaf l's cone over a step: sum, the sum of its triangles' normal coefficients (each
 /// triangle's normal (x1 - x0) x (x2 - x0), a quadratic in t over the step, by its three
 /// Bernstein coefficients, which bound it); axis, the sum's direction ((0, 0, 1) when it is
-/// zero); cos and sin of the least angle between the axis and any coefficient, and bit l of ok
-/// when every coefficient is within 90 degrees of it by CONE_MARGIN and none is degenerate
-/// (cos 0 otherwise).
+/// zero); cos and sin of the least angle between the axis and any coefficient (cos 0 when a
+/// coefficient is not on the axis' side or is degenerate), and bit l of ok when every
+/// coefficient is within 90 degrees of it by CONE_MARGIN (cos above it) and none is degenerate.
 struct ChunkCones {
   alignas(64) Scalar sum[3][CHUNK], axis[3][CHUNK], cos[CHUNK], sin[CHUNK];
   std::uint64_t ok = 0;

@@ -2,8 +2,9 @@
 // of the patch tree per lane, so the same source runs 1, 2, 4 or 8 leaves at a time. A sheet
 // falling flat spends its whole broad phase here: every leaf's cone, every step, before the
 // root's proves the sheet free (docs/collisions.md). Every lane takes the operations of the
-// scalar reference in tests/ccd/test_patch_tree.cpp (Eigen's cross, dot and squaredNorm, in
-// their order) on the same operands, so every target gives its bits (lanes-inl.h).
+// scalar reference, tests/ccd/test_kernels.cpp's scalar_cone (Eigen's cross, dot and
+// squaredNorm, in their order), on the same operands, so every target gives its bits
+// (lanes-inl.h).
 #undef HWY_TARGET_INCLUDE
 #define HWY_TARGET_INCLUDE "kernels_cones.cpp"
 #include <hwy/foreach_target.h>  // IWYU pragma: keep

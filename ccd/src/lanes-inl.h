@@ -1,5 +1,5 @@
 // Internal to ccd/: the lane helpers the SIMD kernels share (kernels_batch.cpp,
-// kernels_one_query.cpp), compiled once per instruction set with the file that includes it
+// kernels_one_query.cpp, kernels_cones.cpp), compiled once per instruction set with the file that includes it
 // (Highway's -inl.h convention: the guard toggles with HWY_TARGET_TOGGLE so that
 // foreach_target.h's every pass sees it).
 //

@@ -64,7 +64,10 @@ TEST(BroadPhase, PairsWithBoxesAreThoseOfATreeOfThem) {
     auto a = random_boxes(rng, 200);
     const auto b = random_boxes(rng, 150);
     // Some boxes touching a leaf's face exactly: overlap counts a shared face, as btDbvt does.
-    for (int i = 0; i < 10; ++i) a[std::size_t(i)].min.x() = b[std::size_t(i)].max.x();
+    for (int i = 0; i < 10; ++i) {
+      const Aabb& leaf = b[std::size_t(i)];
+      a[std::size_t(i)] = {Vec3(leaf.max.x(), leaf.min.y(), leaf.min.z()), Vec3(leaf.max.x() + 0.05, leaf.max.y(), leaf.max.z())};
+    }
     tb.update(b);
     std::vector<std::int32_t> which;
     for (std::int32_t i = 0; i < 200; i += 1 + round) which.push_back(i);

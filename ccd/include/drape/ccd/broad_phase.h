@@ -89,7 +89,7 @@ class BoxTree {
   std::vector<std::pair<std::int32_t, std::int32_t>> self_pairs() const;
   /// Overlapping leaves (i in this tree, j in other), sorted.
   std::vector<std::pair<std::int32_t, std::int32_t>> pairs_with(const BoxTree& other) const;
-  /// The pairs (i, j) of boxes[i], i in which, and this tree's leaf j that overlap, sorted:
+  /// The pairs (i, j) of boxes[i], i in which (each once), and this tree's leaf j that overlap, sorted:
   /// pairs_with's answer for a tree of those boxes, without building or refitting one (a few
   /// boxes near a small obstacle).
   std::vector<std::pair<std::int32_t, std::int32_t>> pairs_with_boxes(std::span<const Aabb> boxes,
