@@ -141,9 +141,18 @@ std::vector<std::pair<std::int32_t, std::int32_t>> PatchTree::self_pairs(std::sp
   m.cos.resize(nodes);
   m.sin.resize(nodes);
   m.cone_ok.resize(nodes);
+  // body(begin, stop) over ranges of the leaves (of at least CHUNK), in parallel when threads > 1.
+  const auto leaf_ranges = [&](const auto& body) {
+    if (threads <= 1) return body(std::size_t(0), leaves_.size());
+    tbb::task_arena arena(threads);
+    arena.execute([&] {
+      tbb::parallel_for(tbb::blocked_range<std::size_t>(0, leaves_.size(), detail::CHUNK),
+                        [&](const auto& r) { body(r.begin(), r.end()); });
+    });
+  };
   // The leaves' normal cones, a chunk of leaves at a time (kernels_cones.cpp).
   static_assert(LEAF_TRIANGLES <= detail::CONE_LEAF_TRIANGLES, "a leaf's triangles fit the cones' kernel");
-  const auto leaf_cones = [&](std::size_t begin, std::size_t stop) {
+  leaf_ranges([&](std::size_t begin, std::size_t stop) {
     detail::ChunkCones cones;
     for (std::size_t b = begin; b < stop; b += detail::CHUNK) {
       const std::size_t n = std::min(detail::CHUNK, stop - b);
@@ -157,38 +166,18 @@ std::vector<std::pair<std::int32_t, std::int32_t>> PatchTree::self_pairs(std::sp
         m.cone_ok[index] = (cones.ok >> j) & 1;
       }
     }
-  };
-  if (threads > 1) {
-    tbb::task_arena arena(threads);
-    arena.execute([&] {
-      tbb::parallel_for(tbb::blocked_range<std::size_t>(0, leaves_.size(), detail::CHUNK),
-                        [&](const auto& r) { leaf_cones(r.begin(), r.end()); });
-    });
-  } else {
-    leaf_cones(0, leaves_.size());
-  }
+  });
   // Their triangles' boxes, and the leaves' boxes.
-  const auto leaf_boxes = [&](std::int32_t index) {
-    const Node& node = nodes_[std::size_t(index)];
-    Aabb box;
-    for (std::int32_t k = 0; k < node.count; ++k) {
-      Aabb& b = m.triangle_box[std::size_t(node.first + k)];
-      b = swept_box(ordered_[std::size_t(node.first + k)], start, end, margin);
-      box = k == 0 ? b : merged(box, b);
-    }
-    m.box[std::size_t(index)] = box;
-  };
-  const std::vector<std::int32_t>& leaves = leaves_;
-  const auto for_leaves = [&](const auto& body) {
-    if (threads > 1) {
-      tbb::task_arena arena(threads);
-      arena.execute([&] {
-        tbb::parallel_for(tbb::blocked_range<std::size_t>(0, leaves.size(), 64), [&](const auto& r) {
-          for (std::size_t i = r.begin(); i < r.end(); ++i) body(leaves[i]);
-        });
-      });
-    } else {
-      for (std::int32_t index : leaves) body(index);
+  const auto leaf_boxes = [&](std::size_t begin, std::size_t stop) {
+    for (std::size_t i = begin; i < stop; ++i) {
+      const Node& node = nodes_[std::size_t(leaves_[i])];
+      Aabb box;
+      for (std::int32_t k = 0; k < node.count; ++k) {
+        Aabb& b = m.triangle_box[std::size_t(node.first + k)];
+        b = swept_box(ordered_[std::size_t(node.first + k)], start, end, margin);
+        box = k == 0 ? b : merged(box, b);
+      }
+      m.box[std::size_t(leaves_[i])] = box;
     }
   };
   // The inner nodes, children first (they follow their parent): merged boxes, and a cone about
@@ -225,7 +214,7 @@ std::vector<std::pair<std::int32_t, std::int32_t>> PatchTree::self_pairs(std::sp
   }
   m.triangle_box.resize(order_.size());
   m.box.resize(nodes);
-  for_leaves(leaf_boxes);
+  leaf_ranges(leaf_boxes);
   for (std::size_t i = nodes; i-- > 0;)
     if (nodes_[i].right >= 0) m.box[i] = merged(m.box[i + 1], m.box[std::size_t(nodes_[i].right)]);
   if (threads <= 1) {

@@ -176,10 +176,12 @@ ccd::Candidates CollisionPipeline::Impl::candidates(Scalar reach, CollisionCount
   bool cloth_tree_used = self_pairs && !culling;
   for (std::size_t k = 0; k < obstacles.size(); ++k) {
     if (!near_cloth[k] || boxes.empty()) continue;
-    for (std::size_t i = 0; i < boxes.size(); ++i)
-      if (ccd::overlap(boxes[i], obstacle_range[k])) near_boxes[k].push_back(std::int32_t(i));
-    by_boxes[k] = near_boxes[k].size() * FEW_BOXES_SHARE <= boxes.size();
-    cloth_tree_used = cloth_tree_used || !by_boxes[k];
+    // Counted until past the share: beyond it the list is not used (a cloth lying on a table).
+    auto& near = near_boxes[k];
+    for (std::size_t i = 0; i < boxes.size() && near.size() * FEW_BOXES_SHARE <= boxes.size(); ++i)
+      if (ccd::overlap(boxes[i], obstacle_range[k])) near.push_back(std::int32_t(i));
+    by_boxes[k] = near.size() * FEW_BOXES_SHARE <= boxes.size();
+    if (!by_boxes[k]) near.clear(), cloth_tree_used = true;
   }
   if (cloth_tree_used && !boxes.empty()) cloth_tree.update(boxes);
   bool features_ready = false;
