@@ -107,6 +107,37 @@ void Integrator::build_pattern(const std::vector<std::pair<int, int>>& extra) {
   std::copy(outer.begin(), outer.end(), w.matrix.outerIndexPtr());
   std::copy(inner.begin(), inner.end(), w.matrix.innerIndexPtr());
   std::fill(w.matrix.valuePtr(), w.matrix.valuePtr() + inner.size(), 0.0);
+  // The spread's base pattern (made once) and where its entries lie in this one.
+  w.spread_source.clear();
+  w.in_base.clear();
+  if (!extra.empty()) {
+    if (w.spread_matrix.nonZeros() == 0) {
+      std::vector<SparseMatrix::StorageIndex> base_outer(std::size_t(3 * w.free_count + 1), 0), base_inner;
+      for (int b = 0; b < w.free_count; ++b)
+        for (int c = 0; c < 3; ++c) {
+          for (const int a : w.base_columns[std::size_t(b)])
+            for (int r = 0; r < 3; ++r) base_inner.push_back(SparseMatrix::StorageIndex(3 * a + r));
+          base_outer[std::size_t(3 * b + c + 1)] = SparseMatrix::StorageIndex(base_inner.size());
+        }
+      w.spread_matrix = SparseMatrix(3 * w.free_count, 3 * w.free_count);
+      w.spread_matrix.resizeNonZeros(Eigen::Index(base_inner.size()));
+      std::copy(base_outer.begin(), base_outer.end(), w.spread_matrix.outerIndexPtr());
+      std::copy(base_inner.begin(), base_inner.end(), w.spread_matrix.innerIndexPtr());
+    }
+    // Both patterns' columns are sorted and the base's rows are a subset of this one's.
+    w.spread_source.resize(std::size_t(w.spread_matrix.nonZeros()));
+    w.in_base.assign(inner.size(), 0);
+    const auto* base_outer = w.spread_matrix.outerIndexPtr();
+    const auto* base_inner = w.spread_matrix.innerIndexPtr();
+    for (int column = 0; column < 3 * w.free_count; ++column) {
+      auto k = outer[std::size_t(column)];
+      for (auto e = base_outer[column]; e < base_outer[column + 1]; ++e) {
+        while (inner[std::size_t(k)] != base_inner[e]) ++k;
+        w.spread_source[std::size_t(e)] = int(k);
+        w.in_base[std::size_t(k)] = 1;
+      }
+    }
+  }
   w.diagonal.resize(w.free_count);
   for (int a = 0; a < w.free_count; ++a) w.diagonal[a] = w.block(a, a);
   w.spring_blocks.resize(model.springs.size());
@@ -133,8 +164,14 @@ void Integrator::build_pattern(const std::vector<std::pair<int, int>>& extra) {
   w.extra_blocks = extra;
 }
 
-int Integrator::analyses() const { return projective_ ? projective_->analyses() : solver_->analyses(); }
-int Integrator::factorisations() const { return projective_ ? 0 : solver_->factorisations(); }
+int Integrator::analyses() const {
+  if (projective_) return projective_->analyses();
+  return solver_->analyses() + (spread_solver_ ? spread_solver_->analyses() : 0);
+}
+int Integrator::factorisations() const {
+  if (projective_) return 0;
+  return solver_->factorisations() + (spread_solver_ ? spread_solver_->factorisations() : 0);
+}
 
 Scalar energy_scale(const Model& model) {
   const Box extent = initial_extent(model);

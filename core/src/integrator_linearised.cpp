@@ -366,10 +366,12 @@ bool Integrator::solve_linearised(State& state, const std::vector<Vec3>& pinned_
   return true;
 }
 
-bool Integrator::solve(StepReport& report, const std::string& failure, const VectorX* again) {
+bool Integrator::solve(StepReport& report, const std::string& failure, const VectorX* again, bool spread) {
   Workspace& w = *work_;
   const auto begin = std::chrono::steady_clock::now();
-  const SolveReport solved = again ? solver_->solve_again(*again, w.solution) : solver_->solve(w.matrix, w.rhs, w.solution);
+  LinearSolver& solver = spread ? *spread_solver_ : *solver_;
+  const SolveReport solved = again ? solver.solve_again(*again, w.solution)
+                                   : solver.solve(spread ? w.spread_matrix : w.matrix, w.rhs, w.solution);
   report.solve_ms += std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - begin).count();
   report.solver_iterations += solved.iterations;
   report.solver_converged = report.solver_converged && solved.converged;
@@ -413,12 +415,24 @@ void Integrator::spread_response(const std::vector<Vec3>& solved, const std::vec
     w.rhs.segment<3>(3 * a) = hold * (motion[v] - solved[v]);
     velocity_rhs.segment<3>(3 * a) = hold * (velocities[v] - solved[v]);
   }
-  if (!solve(report, "the linear solver failed spreading the collision response: ")) return;
+  // With the self contacts' blocks in the pattern (all zero here), the system is solved over
+  // the springs', hinges' and membranes' pattern alone: the same matrix without the fill the
+  // layers' coupling makes (a stack of three cloths at rest: 0.16 against 1.6 GFlop a
+  // factorisation). An entry outside it that is not zero keeps the whole pattern.
+  bool apart = !w.spread_source.empty();
+  for (std::size_t k = 0; k < w.in_base.size() && apart; ++k) apart = w.in_base[k] || w.matrix.valuePtr()[k] == 0;
+  if (apart) {
+    if (!spread_solver_) spread_solver_ = make_linear_solver(m.scene.solver);
+    const Scalar* values = w.matrix.valuePtr();
+    Scalar* spread_values = w.spread_matrix.valuePtr();
+    for (std::size_t e = 0; e < w.spread_source.size(); ++e) spread_values[e] = values[w.spread_source[e]];
+  }
+  if (!solve(report, "the linear solver failed spreading the collision response: ", nullptr, apart)) return;
   for (int v = 0; v < n; ++v) {
     const int a = w.free_index[v];
     if (a >= 0 && !held[std::size_t(v)]) motion[v] = solved[v] + Vec3(w.solution.segment<3>(3 * a));
   }
-  if (!solve(report, "the linear solver failed spreading the collision response: ", &velocity_rhs)) return;
+  if (!solve(report, "the linear solver failed spreading the collision response: ", &velocity_rhs, apart)) return;
   for (int v = 0; v < n; ++v) {
     const int a = w.free_index[v];
     if (a >= 0 && !held[std::size_t(v)]) velocities[v] = solved[v] + Vec3(w.solution.segment<3>(3 * a));

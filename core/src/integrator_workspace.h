@@ -110,6 +110,12 @@ struct Integrator::Workspace {
   std::vector<ContactBlocks> contact_blocks;  // [contact][i][j]: block (vertex i, vertex j)
   std::vector<std::pair<int, int>> extra_blocks;  // free vertex pairs (a < b) the pattern joins for self contacts, sorted
   std::vector<std::vector<int>> base_columns;     // per block column b, the rows a of the springs', hinges' and membranes' blocks, sorted
+  // With extra blocks: the base pattern alone (base_columns' blocks) for the response's spread,
+  // each of its entries' offset in matrix, and per entry of matrix whether the base pattern
+  // holds it. Empty without extra blocks (the matrix is then the base pattern).
+  SparseMatrix spread_matrix;
+  std::vector<int> spread_source;
+  std::vector<char> in_base;
   std::vector<Scalar> contact_holds, contact_impulses;
   std::vector<char> contact_held;  // per contact: neither released nor found pulling in the solve
   std::vector<Scalar> assembled;   // the matrix's values before the contacts' penalties and friction

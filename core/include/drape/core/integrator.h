@@ -99,8 +99,9 @@ class Integrator {
   struct Workspace;
   // The step's system (the workspace's matrix and right-hand side) solved into its solution;
   // time and iterations added to report, and on failure report says so (failure, then why).
-  // With again, solves for that right-hand side with the last solve's matrix instead.
-  bool solve(StepReport& report, const std::string& failure, const VectorX* again = nullptr);
+  // With again, solves for that right-hand side with the last solve's matrix instead. With
+  // spread, the response's spread system (the workspace's spread_matrix) by its own solver.
+  bool solve(StepReport& report, const std::string& failure, const VectorX* again = nullptr, bool spread = false);
   // The collision response spread through the step: the system as the solve assembled it
   // (without mesh contacts' penalties and friction; with the solve's held sphere and plane
   // contacts and their friction on vertices not held here), solved with each held vertex (those the
@@ -173,6 +174,10 @@ class Integrator {
                      const std::vector<Vec3>& velocities) const;
   const Model& model_;
   std::unique_ptr<LinearSolver> solver_;         // linearised: cholmod or cg
+  // The response's spread when the step's pattern holds the self contacts' blocks: its system
+  // has none of them (zero there), so it is factorised over the springs', hinges' and
+  // membranes' pattern alone, without the fill the layers' coupling makes.
+  std::unique_ptr<LinearSolver> spread_solver_;
   std::unique_ptr<ProjectiveSolver> projective_;  // or projective
   std::unique_ptr<CollisionPipeline> collisions_;  // only when the scene needs it
   std::unique_ptr<Workspace> work_;
