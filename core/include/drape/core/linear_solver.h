@@ -78,6 +78,9 @@ class CholmodFactor {
   /// How many times the symbolic analysis ran, and the numeric factorisation.
   int analyses() const;
   int factorisations() const;
+  /// The floating-point operations of one numeric factorisation after the last analysis
+  /// (CHOLMOD's count; 0 before any): what its ordering costs.
+  double flops() const;
 
  private:
   struct Impl;
