@@ -53,13 +53,38 @@ Integrator::Integrator(const Model& model, int threads)
   w.solution.setZero(3 * w.free_count);
 }
 
+namespace {
+
+// The scalar pattern of a matrix of blocks x blocks 3 x 3 blocks whose block column b holds the
+// sorted block rows rows_of(b), written directly (three rows of each block in each of its three
+// columns; a triplet list of nine entries a block took 6 % of a folding cloth's step when the
+// pattern changed every step), every value zero.
+template <class RowsOf>
+SparseMatrix block_pattern(int blocks, RowsOf&& rows_of) {
+  std::vector<SparseMatrix::StorageIndex> outer(std::size_t(3 * blocks + 1), 0), inner;
+  for (int b = 0; b < blocks; ++b) {
+    const std::vector<int>& rows = rows_of(b);
+    for (int c = 0; c < 3; ++c) {
+      for (const int a : rows)
+        for (int r = 0; r < 3; ++r) inner.push_back(SparseMatrix::StorageIndex(3 * a + r));
+      outer[std::size_t(3 * b + c + 1)] = SparseMatrix::StorageIndex(inner.size());
+    }
+  }
+  SparseMatrix matrix(3 * blocks, 3 * blocks);
+  matrix.resizeNonZeros(Eigen::Index(inner.size()));
+  std::copy(outer.begin(), outer.end(), matrix.outerIndexPtr());
+  std::copy(inner.begin(), inner.end(), matrix.innerIndexPtr());
+  std::fill(matrix.valuePtr(), matrix.valuePtr() + inner.size(), 0.0);
+  return matrix;
+}
+
+}  // namespace
+
 void Integrator::build_pattern(const std::vector<std::pair<int, int>>& extra) {
   const Model& model = model_;
   Workspace& w = *work_;
   // The blocks of each block column: the springs', hinges' and membranes' (found once), and the extra
-  // pairs' both ways; then the scalar pattern written directly, three rows of each block in
-  // each of its three columns (a triplet list of nine entries a block took 6 % of a folding
-  // cloth's step when the pattern changed every step).
+  // pairs' both ways; then the scalar pattern (block_pattern).
   if (w.base_columns.empty()) {
     w.base_columns.resize(std::size_t(w.free_count));
     const auto join = [&](int a, int b) { w.base_columns[std::size_t(b)].push_back(a); };
@@ -88,51 +113,31 @@ void Integrator::build_pattern(const std::vector<std::pair<int, int>>& extra) {
   std::vector<std::vector<int>> added(std::size_t(w.free_count));
   for (const auto& [a, b] : extra) added[std::size_t(b)].push_back(a), added[std::size_t(a)].push_back(b);
   std::vector<int> column;
-  std::vector<SparseMatrix::StorageIndex> outer(std::size_t(3 * w.free_count + 1), 0), inner;
-  inner.reserve(std::size_t(9) * (extra.size() * 2 + std::size_t(w.free_count) * 16));
-  for (int b = 0; b < w.free_count; ++b) {
+  w.matrix = block_pattern(w.free_count, [&](int b) -> const std::vector<int>& {
     const auto& base = w.base_columns[std::size_t(b)];
     auto& more = added[std::size_t(b)];
     std::sort(more.begin(), more.end());
     column.clear();
     std::set_union(base.begin(), base.end(), more.begin(), more.end(), std::back_inserter(column));  // both unique
-    for (int c = 0; c < 3; ++c) {
-      for (const int a : column)
-        for (int r = 0; r < 3; ++r) inner.push_back(SparseMatrix::StorageIndex(3 * a + r));
-      outer[std::size_t(3 * b + c + 1)] = SparseMatrix::StorageIndex(inner.size());
-    }
-  }
-  w.matrix = SparseMatrix(3 * w.free_count, 3 * w.free_count);
-  w.matrix.resizeNonZeros(Eigen::Index(inner.size()));
-  std::copy(outer.begin(), outer.end(), w.matrix.outerIndexPtr());
-  std::copy(inner.begin(), inner.end(), w.matrix.innerIndexPtr());
-  std::fill(w.matrix.valuePtr(), w.matrix.valuePtr() + inner.size(), 0.0);
+    return column;
+  });
   // The spread's base pattern (made once) and where its entries lie in this one.
   w.spread_source.clear();
   w.in_base.clear();
   if (!extra.empty()) {
-    if (w.spread_matrix.nonZeros() == 0) {
-      std::vector<SparseMatrix::StorageIndex> base_outer(std::size_t(3 * w.free_count + 1), 0), base_inner;
-      for (int b = 0; b < w.free_count; ++b)
-        for (int c = 0; c < 3; ++c) {
-          for (const int a : w.base_columns[std::size_t(b)])
-            for (int r = 0; r < 3; ++r) base_inner.push_back(SparseMatrix::StorageIndex(3 * a + r));
-          base_outer[std::size_t(3 * b + c + 1)] = SparseMatrix::StorageIndex(base_inner.size());
-        }
-      w.spread_matrix = SparseMatrix(3 * w.free_count, 3 * w.free_count);
-      w.spread_matrix.resizeNonZeros(Eigen::Index(base_inner.size()));
-      std::copy(base_outer.begin(), base_outer.end(), w.spread_matrix.outerIndexPtr());
-      std::copy(base_inner.begin(), base_inner.end(), w.spread_matrix.innerIndexPtr());
-    }
+    if (w.spread_matrix.nonZeros() == 0)
+      w.spread_matrix = block_pattern(w.free_count, [&](int b) -> const std::vector<int>& { return w.base_columns[std::size_t(b)]; });
     // Both patterns' columns are sorted and the base's rows are a subset of this one's.
     w.spread_source.resize(std::size_t(w.spread_matrix.nonZeros()));
-    w.in_base.assign(inner.size(), 0);
+    w.in_base.assign(std::size_t(w.matrix.nonZeros()), 0);
+    const auto* outer = w.matrix.outerIndexPtr();
+    const auto* inner = w.matrix.innerIndexPtr();
     const auto* base_outer = w.spread_matrix.outerIndexPtr();
     const auto* base_inner = w.spread_matrix.innerIndexPtr();
-    for (int column = 0; column < 3 * w.free_count; ++column) {
-      auto k = outer[std::size_t(column)];
-      for (auto e = base_outer[column]; e < base_outer[column + 1]; ++e) {
-        while (inner[std::size_t(k)] != base_inner[e]) ++k;
+    for (int column_index = 0; column_index < 3 * w.free_count; ++column_index) {
+      auto k = outer[column_index];
+      for (auto e = base_outer[column_index]; e < base_outer[column_index + 1]; ++e) {
+        while (inner[k] != base_inner[e]) ++k;
         w.spread_source[std::size_t(e)] = int(k);
         w.in_base[std::size_t(k)] = 1;
       }

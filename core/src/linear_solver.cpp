@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <limits>
+#include <type_traits>
 #include <vector>
 #ifdef __GLIBC__
 #include <malloc.h>
@@ -171,21 +172,28 @@ extern "C" void GOMP_parallel(void (*body)(void*), void* data, unsigned /*num_th
 }
 
 namespace {
-// A CHOLMOD view of A's lower triangle (A stores both; CHOLMOD reads the lower), no copy.
-cholmod_sparse lower_view(const SparseMatrix& A, double* values) {
+// A CHOLMOD view of a symmetric n x n matrix in compressed columns (sorted), of which CHOLMOD
+// reads the lower triangle, no copy; without values, its pattern.
+cholmod_sparse symmetric_view(std::size_t n, const int* outer, const int* inner, double* values) {
   cholmod_sparse v{};
-  v.nrow = v.ncol = size_t(A.rows());
-  v.nzmax = size_t(A.nonZeros());
-  v.p = const_cast<SparseMatrix::StorageIndex*>(A.outerIndexPtr());
-  v.i = const_cast<SparseMatrix::StorageIndex*>(A.innerIndexPtr());
+  v.nrow = v.ncol = n;
+  v.nzmax = size_t(outer[n]);
+  v.p = const_cast<int*>(outer);
+  v.i = const_cast<int*>(inner);
   v.x = values;
   v.stype = -1;
   v.itype = CHOLMOD_INT;
-  v.xtype = CHOLMOD_REAL;
+  v.xtype = values ? CHOLMOD_REAL : CHOLMOD_PATTERN;
   v.dtype = CHOLMOD_DOUBLE;
   v.sorted = 1;
   v.packed = 1;
   return v;
+}
+
+// A CHOLMOD view of A's lower triangle (A stores both; CHOLMOD reads the lower), no copy.
+cholmod_sparse lower_view(const SparseMatrix& A, double* values) {
+  static_assert(std::is_same_v<SparseMatrix::StorageIndex, int>, "CHOLMOD_INT indices");
+  return symmetric_view(size_t(A.rows()), A.outerIndexPtr(), A.innerIndexPtr(), values);
 }
 
 cholmod_dense dense_view(const Scalar* values, Eigen::Index rows, Eigen::Index cols) {
@@ -249,17 +257,7 @@ struct CholmodFactor::Impl {
     cholmod_free_factor(&L, &c);
     cholmod_sparse view = lower_view(A, const_cast<Scalar*>(A.valuePtr()));
     if (block_graph(A)) {
-      cholmod_sparse graph{};
-      graph.nrow = graph.ncol = block_outer.size() - 1;
-      graph.nzmax = block_inner.size();
-      graph.p = block_outer.data();
-      graph.i = block_inner.data();
-      graph.stype = -1;
-      graph.itype = CHOLMOD_INT;
-      graph.xtype = CHOLMOD_PATTERN;
-      graph.dtype = CHOLMOD_DOUBLE;
-      graph.sorted = 1;
-      graph.packed = 1;
+      cholmod_sparse graph = symmetric_view(block_outer.size() - 1, block_outer.data(), block_inner.data(), nullptr);
       cholmod_factor* blocks = order_blocks(graph);
       if (blocks) {
         const auto* order = static_cast<const int*>(blocks->Perm);
