@@ -1,6 +1,12 @@
-// The linear solvers' link with the libraries under them (core/src/linear_solver.cpp).
+// The linear solvers (core/src/linear_solver.cpp): their link with the libraries under them, and
+// the ordering of a system of vertices' blocks.
 #include <dlfcn.h>
 #include <gtest/gtest.h>
+
+#include <Eigen/Dense>
+
+#include "drape/core/forces.h"
+#include "drape/core/linear_solver.h"
 
 // drape's own entry point for an OpenMP parallel region (docs/solvers.md, "No team for
 // CHOLMOD's OpenMP regions") is what libcholmod's calls reach only if the dynamic linker finds
@@ -15,11 +21,6 @@ TEST(LinearSolver, OpenMpRegionsReachDrapesEntryPointBeforeLibgomps) {
   GOMP_parallel([](void* count) { ++*static_cast<int*>(count); }, &runs, 4, 0);
   EXPECT_EQ(runs, 1);  // the body once, on the calling thread
 }
-
-#include <Eigen/Dense>
-
-#include "drape/core/forces.h"
-#include "drape/core/linear_solver.h"
 
 namespace drape {
 namespace {
